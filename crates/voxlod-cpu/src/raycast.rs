@@ -1,0 +1,1 @@
+//! BVH ray casting.

@@ -1,0 +1,1 @@
+//! binvox occupancy export and import.

@@ -1,0 +1,1 @@
+//! The `.vxl` container (versioned header, grid spec, brick table, payload, checksum).

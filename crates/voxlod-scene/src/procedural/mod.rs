@@ -1,0 +1,1 @@
+//! Deterministic procedural scenes.

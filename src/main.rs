@@ -1,0 +1,5 @@
+//! The `voxlod` command-line tool.
+
+fn main() {
+    println!("voxlod");
+}

@@ -1,0 +1,1 @@
+//! End-to-end and cross-crate tests of voxlod, in one test binary (one link on 2-core CI).
