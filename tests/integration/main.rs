@@ -1,1 +1,3 @@
 //! End-to-end and cross-crate tests of voxlod, in one test binary (one link on 2-core CI).
+
+mod scene_files;

@@ -1,0 +1,1 @@
+//! Renderers: the ground truth on the mesh, and voxel renderers.

@@ -1,0 +1,1 @@
+//! Loading real and broken scene files.
