@@ -134,6 +134,47 @@ impl<T> BrickMap<T> {
         Ok(map)
     }
 
+    /// Builds a map from its parts: brick headers (sorted by Morton code, each with a non-empty
+    /// mask and `first` equal to the number of values before it) and the values they address, in
+    /// global Morton order. Every invariant is checked — Morton order, bricks and voxels inside
+    /// `dims`, `first` offsets, value count — so parts read from a file cannot build a map that
+    /// panics later.
+    ///
+    /// ```
+    /// use glam::UVec3;
+    /// use voxlod_format::BrickMap;
+    /// let map = BrickMap::from_voxels(UVec3::splat(20), [(UVec3::new(9, 1, 17), 5u8)]).unwrap();
+    /// let rebuilt =
+    ///     BrickMap::from_parts(map.dims(), map.bricks().to_vec(), map.values().to_vec()).unwrap();
+    /// assert_eq!(rebuilt.get(UVec3::new(9, 1, 17)), Some(&5));
+    /// // Parts that disagree are an error, not a broken map.
+    /// assert!(BrickMap::from_parts(map.dims(), map.bricks().to_vec(), vec![1u8, 2]).is_err());
+    /// ```
+    pub fn from_parts(dims: UVec3, bricks: Vec<BrickHeader>, values: Vec<T>) -> Result<Self> {
+        let count = check_bricks(dims, &bricks).map_err(|(_, e)| e)?;
+        if count != values.len() {
+            return Err(Error::InvalidGrid {
+                reason: format!(
+                    "the bricks address {count} values but {} were given",
+                    values.len()
+                ),
+            });
+        }
+        Ok(Self::from_checked_parts(dims, bricks, values))
+    }
+
+    /// [`BrickMap::from_parts`] for parts already checked with [`check_bricks`] (whose count
+    /// equals `values.len()`).
+    pub(crate) fn from_checked_parts(
+        dims: UVec3,
+        bricks: Vec<BrickHeader>,
+        values: Vec<T>,
+    ) -> Self {
+        let mut map = Self { dims, bricks, values, lookup: MortonMap::default() };
+        map.rebuild_lookup();
+        map
+    }
+
     fn rebuild_lookup(&mut self) {
         self.lookup = self.bricks.iter().enumerate().map(|(i, b)| (b.morton, i as u32)).collect();
     }
@@ -331,6 +372,75 @@ impl<T> BrickMap<T> {
     }
 }
 
+/// Checks a brick table against a grid of `dims` voxels: Morton codes canonical, strictly
+/// increasing and inside the grid, masks non-empty with no voxel outside `dims`, `first` equal to
+/// the running value count. Returns the number of values the table addresses, or the index of the
+/// first offending brick with the error. Cost: O(bricks), plus 512 steps per brick on the grid's
+/// far boundary.
+pub(crate) fn check_bricks(
+    dims: UVec3,
+    bricks: &[BrickHeader],
+) -> std::result::Result<usize, (usize, Error)> {
+    if dims.max_element() > morton::MAX_COORD {
+        let requested = dims.as_u64vec3().to_array();
+        return Err((0, Error::GridTooLarge { requested, max: morton::MAX_COORD as u64 }));
+    }
+    let invalid = |i: usize, reason: String| (i, Error::InvalidGrid { reason });
+    let brick_dims = (dims + (BRICK_EDGE - 1)) / BRICK_EDGE;
+    let mut next = 0u32;
+    for (i, h) in bricks.iter().enumerate() {
+        let b = morton::decode(h.morton);
+        if morton::encode(b) != h.morton {
+            return Err(invalid(
+                i,
+                format!("brick {i} has a non-canonical Morton code {:#x}", h.morton),
+            ));
+        }
+        if !b.cmplt(brick_dims).all() {
+            return Err((i, Error::OutOfBounds { coord: b << BRICK_SHIFT, dims }));
+        }
+        if i > 0 && bricks[i - 1].morton >= h.morton {
+            return Err(invalid(i, format!("brick {i} is out of Morton order")));
+        }
+        if h.first != next {
+            return Err(invalid(
+                i,
+                format!("brick {i} starts at value {} instead of {next}", h.first),
+            ));
+        }
+        let n = h.count();
+        if n == 0 {
+            return Err(invalid(i, format!("brick {i} is allocated but empty")));
+        }
+        let origin = b << BRICK_SHIFT;
+        if (origin + BRICK_EDGE).cmpgt(dims).any() {
+            let inside = inside_mask(origin, dims);
+            if let Some(w) = (0..8).find(|&w| h.mask[w] & !inside[w] != 0) {
+                let local = w as u64 * 64 + (h.mask[w] & !inside[w]).trailing_zeros() as u64;
+                return Err((
+                    i,
+                    Error::OutOfBounds { coord: origin + morton::decode(local), dims },
+                ));
+            }
+        }
+        next = next.checked_add(n).ok_or_else(|| {
+            invalid(i, format!("brick {i} takes the value count past {}", u32::MAX))
+        })?;
+    }
+    Ok(next as usize)
+}
+
+/// Mask of the local voxels of the brick at voxel `origin` that lie inside `dims`.
+fn inside_mask(origin: UVec3, dims: UVec3) -> [u64; 8] {
+    let mut mask = [0u64; 8];
+    for local in 0..BRICK_VOXELS as u32 {
+        if (origin + morton::decode(local as u64)).cmplt(dims).all() {
+            mask[(local >> 6) as usize] |= 1 << (local & 63);
+        }
+    }
+    mask
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -392,6 +502,47 @@ mod tests {
             Err(Error::OutOfBounds { .. })
         ));
         assert_eq!(BrickMap::<u8>::new(dims).get(UVec3::new(9, 9, 9)), None);
+    }
+
+    #[test]
+    fn from_parts_rebuilds_and_rejects_inconsistent_parts() {
+        let dims = UVec3::new(12, 9, 17);
+        let voxels =
+            [(UVec3::new(0, 0, 0), 1u32), (UVec3::new(11, 8, 16), 2), (UVec3::new(3, 8, 9), 3)];
+        let map = BrickMap::from_voxels(dims, voxels).unwrap();
+        let rebuilt =
+            BrickMap::from_parts(dims, map.bricks().to_vec(), map.values().to_vec()).unwrap();
+        rebuilt.validate().unwrap();
+        for (c, v) in voxels {
+            assert_eq!(rebuilt.get(c), Some(&v));
+        }
+        let parts = |f: &dyn Fn(&mut Vec<BrickHeader>)| {
+            let mut bricks = map.bricks().to_vec();
+            f(&mut bricks);
+            BrickMap::from_parts(dims, bricks, map.values().to_vec())
+        };
+        let reason = |r: Result<BrickMap<u32>>| r.unwrap_err().to_string();
+        // Unsorted: each brick holds one voxel, so swapping codes and masks leaves only the
+        // order wrong.
+        let swapped = parts(&|b| {
+            let zero = (b[0].morton, b[0].mask);
+            (b[0].morton, b[0].mask) = (b[1].morton, b[1].mask);
+            (b[1].morton, b[1].mask) = zero;
+        });
+        assert!(reason(swapped).contains("Morton order"));
+        assert!(reason(parts(&|b| b[1].mask = [0; 8])).contains("empty"));
+        assert!(reason(parts(&|b| b[1].first += 1)).contains("starts at value"));
+        // A voxel beyond the grid's far face, a non-canonical code, too few values.
+        assert!(matches!(
+            parts(&|b| b.last_mut().unwrap().mask[7] |= 1 << 63),
+            Err(Error::OutOfBounds { .. })
+        ));
+        assert!(parts(&|b| b[0].morton |= 1 << 63).is_err());
+        assert!(
+            BrickMap::from_parts(UVec3::new(8, 8, 8), map.bricks().to_vec(), map.values().to_vec())
+                .is_err()
+        );
+        assert!(BrickMap::from_parts(dims, map.bricks().to_vec(), vec![0u32; 2]).is_err());
     }
 
     #[test]

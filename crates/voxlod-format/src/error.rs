@@ -86,6 +86,30 @@ pub enum Error {
         /// Newest version supported.
         supported: u32,
     },
+    /// A `.vxl` file holds records of another type than the one asked for.
+    #[error(
+        "{path}: holds {found} records of {found_size} bytes, not the requested {expected} records of {expected_size} bytes"
+    )]
+    RecordMismatch {
+        /// The file.
+        path: PathBuf,
+        /// Tag of the requested record type (see `vxl::tag_name`).
+        expected: String,
+        /// Size in bytes of the requested record type.
+        expected_size: u32,
+        /// Tag found in the file.
+        found: String,
+        /// Record size found in the file.
+        found_size: u32,
+    },
+    /// Metadata that cannot be stored in a `.vxl` file (empty or repeated key, too long).
+    #[error("metadata key {key:?}: {reason}")]
+    InvalidMetadata {
+        /// The offending key.
+        key: String,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// The stored checksum does not match the content.
     #[error(
         "{path}: checksum mismatch (stored {stored:#010x}, computed {computed:#010x}): the file is corrupted"

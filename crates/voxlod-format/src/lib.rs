@@ -18,3 +18,4 @@ pub mod vxl;
 pub use brickmap::{BRICK_EDGE, BRICK_VOXELS, BrickMap};
 pub use error::{Error, Result};
 pub use grid::GridSpec;
+pub use vxl::{Occupancy, VxlRecord};

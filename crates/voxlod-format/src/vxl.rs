@@ -1,1 +1,0 @@
-//! The `.vxl` container (versioned header, grid spec, brick table, payload, checksum).
