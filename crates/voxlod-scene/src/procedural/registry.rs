@@ -1,0 +1,274 @@
+//! The builtin procedural scenes by name, with parameters, for the CLI and the experiments.
+//!
+//! A scene spec is `NAME` or `NAME?KEY=VALUE&KEY=VALUE…` — the query-string form the CLI accepts
+//! after `builtin:` — for example `forest?trees=20&seed=3` or `island?grass=100000`. Keys are the
+//! ones [`builtin_params`] lists (with defaults and ranges); each may be given once. Integers are
+//! decimal, numbers anything Rust's `f32` parser accepts, booleans `true`/`false`/`1`/`0`.
+//! Unknown scenes, unknown or repeated keys, malformed pairs and out-of-range values are all an
+//! [`Error::InvalidParameter`] that names the scene and key and says what is valid.
+
+use std::sync::LazyLock;
+
+use glam::Vec3;
+
+use super::param::{parse, parse_bool, unknown};
+use super::primitives::{cornell_box, cube, icosphere, scene_with};
+use super::{BlindsParams, ForestParams, IslandParams, blinds, forest, island};
+use crate::{Error, Material, Result, Scene};
+
+/// One parameter of a builtin scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParamInfo {
+    /// The key in a spec.
+    pub name: &'static str,
+    /// Its default as text (`None` where there is none: the parameter is optional).
+    pub default: Option<&'static str>,
+    /// What it does and its valid range.
+    pub description: &'static str,
+}
+
+const fn param(name: &'static str, default: &'static str, description: &'static str) -> ParamInfo {
+    ParamInfo { name, default: Some(default), description }
+}
+
+/// A builtin scene: name, description, parameters and builder.
+struct Builtin {
+    name: &'static str,
+    description: &'static str,
+    params: &'static [ParamInfo],
+    build: fn(&[(&str, &str)]) -> Result<Scene>,
+}
+
+const FOREST_PARAMS: &[ParamInfo] = &[
+    param("trees", "6", "number of trees, 1..=100000"),
+    param("leaves", "24000", "leaves per tree (2 triangles each), 0..=1000000"),
+    param("cluster", "24", "leaves per tuft, 1..=4096 (1: scattered leaves)"),
+    param("depth", "4", "branch levels below the trunk, 0..=6"),
+    param("branching", "3", "children per branch, 1..=6"),
+    param("seed", "1", "random seed, any u64"),
+    param("extent", "10", "side of the square ground, 0.001..=1e6"),
+    param("height", "3.5", "mean tree height, (0, 2·extent]"),
+    param("leaf_size", "0.016666668", "largest leaf length, (0, extent/10]"),
+    param("ground", "8", "quads per side of the ground, 1..=1024"),
+    param("alpha", "true", "alpha-masked textured leaves (else untextured kites)"),
+    ParamInfo {
+        name: "triangles",
+        default: None,
+        description: "size the forest to at least this many triangles (sets trees, leaves and \
+                      extent; not with trees or leaves)",
+    },
+];
+
+const ISLAND_PARAMS: &[ParamInfo] = &[
+    param("seed", "1", "random seed, any u64"),
+    param("extent", "20", "side of the square sea, 0.001..=1e6"),
+    param("terrain", "128", "terrain quads per side, 8..=2048"),
+    param("grass", "40000", "grass blades (3 triangles each), 0..=8000000"),
+    param("rocks", "24", "rocks (320 triangles each), 0..=10000"),
+    param("blade_height", "0.25", "tallest grass blade, (0, extent/20]"),
+    param("blade_width", "0.012", "widest blade base, (0, blade_height]"),
+];
+
+const BLINDS_PARAMS: &[ParamInfo] = &[
+    param("slats", "128", "number of slats (12 triangles each), 2..=4096"),
+    param("tilt", "20", "slat tilt in degrees, -89..=89 (0 = open)"),
+    param("extent", "2", "scene width, 0.001..=1e6"),
+];
+
+const SPHERE_PARAMS: &[ParamInfo] =
+    &[param("subdiv", "3", "icosphere subdivisions (20·4^subdiv triangles), 0..=7")];
+
+const BUILTINS: &[Builtin] = &[
+    Builtin {
+        name: "forest",
+        description: "ground and trees with thin branches and many sub-voxel leaves",
+        params: FOREST_PARAMS,
+        build: |kv| forest(&forest_params(kv)?),
+    },
+    Builtin {
+        name: "island",
+        description: "heightfield island in a specular sea, rocks, thin grass blades",
+        params: ISLAND_PARAMS,
+        build: |kv| island(&island_params(kv)?),
+    },
+    Builtin {
+        name: "blinds",
+        description: "tilted two-coloured slats below voxel spacing: directional opacity",
+        params: BLINDS_PARAMS,
+        build: |kv| blinds(&blinds_params(kv)?),
+    },
+    Builtin {
+        name: "cornell",
+        description: "the Cornell box with two boxes and a point light",
+        params: &[],
+        build: |_| Ok(cornell_box()),
+    },
+    Builtin {
+        name: "cube",
+        description: "a closed unit cube [-0.5, 0.5]³",
+        params: &[],
+        build: |_| {
+            let m = cube(Vec3::splat(-0.5), Vec3::splat(0.5));
+            Ok(scene_with("cube", m, Material::default()))
+        },
+    },
+    Builtin {
+        name: "sphere",
+        description: "a closed unit icosphere",
+        params: SPHERE_PARAMS,
+        build: |kv| {
+            let mut subdiv = 3;
+            for &(k, v) in kv {
+                match k {
+                    "subdiv" => subdiv = parse("sphere", k, v)?,
+                    _ => return Err(unknown("sphere", k, v, &["subdiv"])),
+                }
+            }
+            super::param::check_u32("sphere", "subdiv", subdiv, 0, 7)?;
+            Ok(scene_with("sphere", icosphere(Vec3::ZERO, 1.0, subdiv), Material::default()))
+        },
+    },
+];
+
+static NAMES: LazyLock<Vec<(&'static str, &'static str)>> =
+    LazyLock::new(|| BUILTINS.iter().map(|b| (b.name, b.description)).collect());
+
+/// The builtin procedural scenes: `(name, description)`.
+pub fn builtin_names() -> &'static [(&'static str, &'static str)] {
+    &NAMES
+}
+
+fn find(name: &str) -> Result<&'static Builtin> {
+    BUILTINS.iter().find(|b| b.name == name).ok_or_else(|| Error::InvalidParameter {
+        name: "builtin scene".into(),
+        value: name.into(),
+        reason: format!(
+            "unknown; the builtin scenes are: {}",
+            BUILTINS.iter().map(|b| b.name).collect::<Vec<_>>().join(", ")
+        ),
+    })
+}
+
+/// The parameters builtin `name` takes, or an error for an unknown name.
+pub fn builtin_params(name: &str) -> Result<&'static [ParamInfo]> {
+    Ok(find(name)?.params)
+}
+
+/// Builds builtin `name` with `params` as `(key, value)` pairs (see the module docs).
+pub fn builtin(name: &str, params: &[(&str, &str)]) -> Result<Scene> {
+    let b = find(name)?;
+    for (i, &(key, value)) in params.iter().enumerate() {
+        if !b.params.iter().any(|p| p.name == key) {
+            let valid: Vec<&str> = b.params.iter().map(|p| p.name).collect();
+            return Err(unknown(name, key, value, &valid));
+        }
+        if params[..i].iter().any(|&(k, _)| k == key) {
+            return Err(Error::InvalidParameter {
+                name: format!("{name}.{key}"),
+                value: value.into(),
+                reason: "given more than once".into(),
+            });
+        }
+    }
+    (b.build)(params)
+}
+
+/// Splits a spec `NAME[?KEY=VALUE&…]` into its name and pairs, without building anything.
+pub fn parse_spec(spec: &str) -> Result<(&str, Vec<(&str, &str)>)> {
+    let spec = spec.trim();
+    let (name, query) = spec.split_once('?').unwrap_or((spec, ""));
+    let bad = |value: &str, reason: &str| Error::InvalidParameter {
+        name: format!("scene spec '{spec}'"),
+        value: value.into(),
+        reason: reason.into(),
+    };
+    if name.is_empty() {
+        return Err(bad(spec, "no scene name; expected NAME[?KEY=VALUE&...]"));
+    }
+    let mut pairs = Vec::new();
+    for pair in query.split('&').filter(|_| !query.is_empty()) {
+        match pair.split_once('=') {
+            Some((k, v)) if !k.trim().is_empty() => pairs.push((k.trim(), v.trim())),
+            _ => return Err(bad(pair, "expected KEY=VALUE between '&'s")),
+        }
+    }
+    Ok((name, pairs))
+}
+
+/// Builds the scene a spec `NAME[?KEY=VALUE&…]` names (see the module docs).
+pub fn from_spec(spec: &str) -> Result<Scene> {
+    let (name, pairs) = parse_spec(spec)?;
+    builtin(name, &pairs)
+}
+
+/// [`ForestParams`] from spec pairs (keys already checked against [`FOREST_PARAMS`]).
+pub(super) fn forest_params(kv: &[(&str, &str)]) -> Result<ForestParams> {
+    let mut p = ForestParams::default();
+    let mut target = None;
+    for &(k, v) in kv {
+        let f = "forest";
+        match k {
+            "trees" => p.trees = parse(f, k, v)?,
+            "leaves" => p.leaves_per_tree = parse(f, k, v)?,
+            "cluster" => p.leaf_cluster = parse(f, k, v)?,
+            "depth" => p.branch_depth = parse(f, k, v)?,
+            "branching" => p.branching = parse(f, k, v)?,
+            "seed" => p.seed = parse(f, k, v)?,
+            "extent" => p.extent = parse(f, k, v)?,
+            "height" => p.tree_height = parse(f, k, v)?,
+            "leaf_size" => p.leaf_size = parse(f, k, v)?,
+            "ground" => p.ground_subdivisions = parse(f, k, v)?,
+            "alpha" => p.alpha_leaves = parse_bool(f, k, v)?,
+            "triangles" => target = Some((v, parse::<u64>(f, k, v)?)),
+            _ => return Err(unknown(f, k, v, &[])),
+        }
+    }
+    if let Some((text, target)) = target {
+        if kv.iter().any(|&(k, _)| k == "trees" || k == "leaves") {
+            return Err(Error::InvalidParameter {
+                name: "forest.triangles".into(),
+                value: text.into(),
+                reason: "sets trees and leaves itself: give either triangles or trees/leaves"
+                    .into(),
+            });
+        }
+        p = p.fit_triangles(target);
+    }
+    p.validate()?;
+    Ok(p)
+}
+
+/// [`IslandParams`] from spec pairs.
+pub(super) fn island_params(kv: &[(&str, &str)]) -> Result<IslandParams> {
+    let mut p = IslandParams::default();
+    for &(k, v) in kv {
+        let s = "island";
+        match k {
+            "seed" => p.seed = parse(s, k, v)?,
+            "extent" => p.extent = parse(s, k, v)?,
+            "terrain" => p.terrain_resolution = parse(s, k, v)?,
+            "grass" => p.grass_blades = parse(s, k, v)?,
+            "rocks" => p.rocks = parse(s, k, v)?,
+            "blade_height" => p.blade_height = parse(s, k, v)?,
+            "blade_width" => p.blade_width = parse(s, k, v)?,
+            _ => return Err(unknown(s, k, v, &[])),
+        }
+    }
+    p.validate()?;
+    Ok(p)
+}
+
+/// [`BlindsParams`] from spec pairs.
+pub(super) fn blinds_params(kv: &[(&str, &str)]) -> Result<BlindsParams> {
+    let mut p = BlindsParams::default();
+    for &(k, v) in kv {
+        match k {
+            "slats" => p.slats = parse("blinds", k, v)?,
+            "tilt" => p.tilt_deg = parse("blinds", k, v)?,
+            "extent" => p.extent = parse("blinds", k, v)?,
+            _ => return Err(unknown("blinds", k, v, &[])),
+        }
+    }
+    p.validate()?;
+    Ok(p)
+}
