@@ -102,20 +102,55 @@ impl<T> BrickMap<T> {
     /// Builds a map from `(coordinate, value)` pairs in any order. A coordinate outside `dims`
     /// or given twice is an error.
     pub fn from_voxels(dims: UVec3, voxels: impl IntoIterator<Item = (UVec3, T)>) -> Result<Self> {
-        let mut keyed: Vec<(u64, UVec3, T)> = Vec::new();
+        let mut keyed: Vec<(u64, T)> = Vec::new();
         for (c, v) in voxels {
             if !c.cmplt(dims).all() {
                 return Err(Error::OutOfBounds { coord: c, dims });
             }
-            keyed.push((morton::encode(c), c, v));
+            keyed.push((morton::encode(c), v));
         }
         keyed.sort_unstable_by_key(|k| k.0);
-        if let Some(w) = keyed.windows(2).find(|w| w[0].0 == w[1].0) {
-            return Err(Error::DuplicateVoxel { coord: w[0].1 });
-        }
+        Self::from_morton_sorted(dims, keyed)
+    }
+
+    /// Builds a map from `(Morton code, value)` pairs already in strictly increasing code order
+    /// (what a voxelizer that sorts by Morton code produces): no sort, no copy of the input.
+    /// A code out of order or repeated ([`Error::DuplicateVoxel`]) or a voxel outside `dims`
+    /// is an error.
+    ///
+    /// ```
+    /// use glam::UVec3;
+    /// use voxlod_format::{BrickMap, morton};
+    /// let codes = [UVec3::new(0, 0, 0), UVec3::new(1, 0, 0), UVec3::new(9, 9, 9)].map(morton::encode);
+    /// let map = BrickMap::from_morton_sorted(UVec3::splat(16), codes.iter().map(|&c| (c, c))).unwrap();
+    /// assert_eq!(map.len(), 3);
+    /// assert_eq!(map.bricks().len(), 2);
+    /// assert!(BrickMap::from_morton_sorted(UVec3::splat(16), [(5u64, ()), (5, ())]).is_err());
+    /// ```
+    pub fn from_morton_sorted(
+        dims: UVec3,
+        voxels: impl IntoIterator<Item = (u64, T)>,
+    ) -> Result<Self> {
+        let voxels = voxels.into_iter();
         let mut map = Self::new(dims);
-        map.values.reserve_exact(keyed.len());
-        for (code, _, v) in keyed {
+        map.values.reserve_exact(voxels.size_hint().0);
+        let mut previous: Option<u64> = None;
+        for (code, v) in voxels {
+            if previous.is_some_and(|p| p >= code) {
+                let c = morton::decode(code);
+                return Err(if previous == Some(code) {
+                    Error::DuplicateVoxel { coord: c }
+                } else {
+                    Error::InvalidGrid {
+                        reason: format!("voxel {c} (Morton code {code}) is out of Morton order"),
+                    }
+                });
+            }
+            previous = Some(code);
+            let c = morton::decode(code);
+            if code >> 63 != 0 || !c.cmplt(dims).all() {
+                return Err(Error::OutOfBounds { coord: c, dims });
+            }
             let brick = code >> LOCAL_BITS;
             let local = (code & ((1 << LOCAL_BITS) - 1)) as u32;
             if map.bricks.last().is_none_or(|b| b.morton != brick) {

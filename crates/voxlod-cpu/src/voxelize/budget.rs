@@ -18,9 +18,10 @@ use super::lattice::{Lattice, Reach, voxel_span};
 use super::overlap::normal;
 use crate::{Error, Result};
 
-/// Bytes held per occupied voxel at the peak of assembly: its [`super::TriangleRange`] (8), the
-/// keyed entry `BrickMap::from_voxels` sorts (32) and a sorted code (8).
-pub const BYTES_PER_VOXEL: u64 = 48;
+/// Bytes held per occupied voxel at the peak of assembly: its [`super::TriangleRange`] in the
+/// brick map (8) and its sorted key (8, or 16 for wide keys), which
+/// `BrickMap::from_morton_sorted` consumes in place.
+pub const BYTES_PER_VOXEL: u64 = 24;
 /// Bytes per allocated 8³ brick: header (80) and lookup entry (~16).
 pub const BYTES_PER_BRICK: u64 = 96;
 

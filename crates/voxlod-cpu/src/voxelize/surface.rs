@@ -9,7 +9,7 @@
 //! Morton order; larger, sparser grids sort and deduplicate Morton codes instead.
 
 use rayon::prelude::*;
-use voxlod_format::{BrickMap, morton};
+use voxlod_format::BrickMap;
 use voxlod_scene::Geometry;
 
 use super::budget::{self, result_bytes};
@@ -116,5 +116,5 @@ pub fn brick_map(
     dims: glam::UVec3,
     voxels: impl IntoIterator<Item = (u64, TriangleRange)>,
 ) -> Result<BrickMap<TriangleRange>> {
-    Ok(BrickMap::from_voxels(dims, voxels.into_iter().map(|(c, r)| (morton::decode(c), r)))?)
+    Ok(BrickMap::from_morton_sorted(dims, voxels)?)
 }
