@@ -1,0 +1,195 @@
+//! Scenes, views and kernels shared by the `raycast` and `render` benches.
+
+#![allow(dead_code)] // each bench uses a subset
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use voxlod_cpu::raycast::Bvh;
+use voxlod_scene::procedural::{ForestParams, forest};
+use voxlod_scene::{Camera, Geometry, Material, Mesh, Scene};
+
+/// The image edge of the primary-ray benches (the 512×512).
+pub const SIZE: u32 = 512;
+
+/// The bunny of `assets/bunny/bunny.obj` (npm `bunny`, 3 674 triangles); if it cannot be
+/// loaded, a stand-in: a noise-displaced icosphere of 5 120 triangles, said on stderr.
+pub fn bunny() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
+    match Scene::load(&path) {
+        Ok(scene) => scene,
+        Err(e) => {
+            eprintln!(
+                "note: {} not loaded ({e}); using a displaced icosphere instead",
+                path.display()
+            );
+            bumpy_sphere(4)
+        }
+    }
+}
+
+/// The large scene: the procedural forest at about 1 M triangles (alpha-masked leaves).
+pub fn large() -> Scene {
+    forest(&ForestParams::with_target_triangles(1_000_000)).expect("forest parameters are valid")
+}
+
+/// A closed icosphere subdivided `levels` times (20·4^levels triangles), its vertices moved
+/// radially by a smooth deterministic noise of ±15 %.
+pub fn bumpy_sphere(levels: u32) -> Scene {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut pos: Vec<Vec3> = [
+        [-1., t, 0.],
+        [1., t, 0.],
+        [-1., -t, 0.],
+        [1., -t, 0.],
+        [0., -1., t],
+        [0., 1., t],
+        [0., -1., -t],
+        [0., 1., -t],
+        [t, 0., -1.],
+        [t, 0., 1.],
+        [-t, 0., -1.],
+        [-t, 0., 1.],
+    ]
+    .iter()
+    .map(|&p| Vec3::from_array(p).normalize())
+    .collect();
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        for [a, b, c] in tris {
+            let mut m = |x: u32, y: u32| {
+                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
+                    pos.push(((pos[x as usize] + pos[y as usize]) * 0.5).normalize());
+                    pos.len() as u32 - 1
+                })
+            };
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    let noise = |p: Vec3| (3.1 * p.x).sin() * (2.3 * p.y + 1.0).sin() * (2.7 * p.z + 0.5).cos();
+    let mut mesh = Mesh {
+        name: "bumpy sphere".into(),
+        positions: pos.iter().map(|&p| p * (1.0 + 0.15 * noise(p))).collect(),
+        indices: tris,
+        material: 0,
+        ..Default::default()
+    };
+    mesh.compute_normals();
+    Scene {
+        name: "bumpy sphere".into(),
+        meshes: vec![mesh],
+        materials: vec![Material::default()],
+        ..Default::default()
+    }
+}
+
+/// The scene's framing view (its own camera, or one fitting its bounds): many rays miss.
+pub fn framing(scene: &Scene) -> Camera {
+    scene.default_camera().expect("a non-empty scene")
+}
+
+/// A close-up: a 12° view from the framing direction at a third of the distance, aimed at
+/// the centre of the bounds, where every ray of the bunny hits.
+pub fn close_up(scene: &Scene) -> Camera {
+    let (lo, hi) = scene.bounds().expect("a non-empty scene");
+    let c = (lo + hi) * 0.5;
+    let f = framing(scene);
+    Camera::look_at(c + (f.eye - c) / 3.0, c, f.up, 12.0)
+}
+
+/// Casts one closest-hit ray through the centre of every pixel of a `size²` image, in
+/// parallel over rows on the current rayon pool; returns the number of hits.
+pub fn primary_rays(bvh: &Bvh, camera: &Camera, size: u32) -> u64 {
+    let frame = camera.frame(size, size);
+    (0..size)
+        .into_par_iter()
+        .map(|y| {
+            let mut hits = 0u64;
+            for x in 0..size {
+                let dir = frame.ray_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                hits += bvh.intersect(frame.eye, dir, 0.0, f32::INFINITY).is_some() as u64;
+            }
+            hits
+        })
+        .sum()
+}
+
+/// [`primary_rays`] traced as packets of 2×2 pixels (`Bvh::intersect_packet`); `size` must
+/// be even.
+pub fn primary_packets(bvh: &Bvh, camera: &Camera, size: u32) -> u64 {
+    let frame = camera.frame(size, size);
+    (0..size / 2)
+        .into_par_iter()
+        .map(|by| {
+            let mut hits = 0u64;
+            for bx in 0..size / 2 {
+                let ray = |dx: u32, dy: u32| {
+                    let p = Vec2::new((2 * bx + dx) as f32 + 0.5, (2 * by + dy) as f32 + 0.5);
+                    frame.ray_dir(p)
+                };
+                let dirs = [ray(0, 0), ray(1, 0), ray(0, 1), ray(1, 1)];
+                let h = bvh.intersect_packet(frame.eye, &dirs, 0.0, f32::INFINITY);
+                hits += h.iter().filter(|h| h.is_some()).count() as u64;
+            }
+            hits
+        })
+        .sum()
+}
+
+/// A rayon pool of `threads` threads.
+pub fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool")
+}
+
+/// The geometry and BVH of a scene.
+pub fn prepare(scene: &Scene) -> (Geometry, Bvh) {
+    let g = scene.geometry();
+    let bvh = Bvh::new(&g).expect("a valid scene");
+    (g, bvh)
+}
+
+/// CPU time the calling thread has run (from `/proc/thread-self/schedstat`, nanoseconds):
+/// unlike wall time, it does not count time other processes took from this thread, so rates
+/// per CPU-second measure per-core speed on a busy machine. Zero where unavailable.
+pub fn thread_cpu_time() -> std::time::Duration {
+    let ns = std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .unwrap_or(0);
+    std::time::Duration::from_nanos(ns)
+}
+
+/// Runs `f` on a fresh 1-thread pool and returns its result with the CPU time it took.
+pub fn single_core<T: Send>(f: impl FnOnce() -> T + Send) -> (T, std::time::Duration) {
+    pool(1).install(|| {
+        let start = thread_cpu_time();
+        let out = f();
+        (out, thread_cpu_time() - start)
+    })
+}
