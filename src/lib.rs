@@ -3,10 +3,19 @@
 //! - [`format`](mod@format): grids, Morton codes, sparse brick maps, `.vxl` and binvox;
 //! - [`scene`]: meshes, materials, cameras, lights, OBJ/glTF loaders, procedural scenes;
 //! - [`cpu`]: the CPU references (voxelizers, ray casting, renderers, shading);
-//! - [`eval`]: metrics (MSE, PSNR, SSIM) and reports.
+//! - [`eval`]: metrics (MSE, PSNR, SSIM) and reports;
+//!
+//! and adds scene specs with embedded models ([`scenes`]), the default experiment
+//! ([`experiment`]) and peak-memory measurement ([`alloc`]).
 
 #![warn(missing_docs)]
 
+pub mod alloc;
+mod error;
+pub mod experiment;
+pub mod scenes;
+
+pub use error::Error;
 pub use voxlod_cpu as cpu;
 pub use voxlod_eval as eval;
 pub use voxlod_format as format;

@@ -1,95 +1,33 @@
 //! Conservative voxelization at 256³: occupancy only (what Open3D measures) and with per-voxel
-//! triangle lists, on
-//! - `leaves_1M`: a forest-like stand-in of ~1 M triangles — 500 k small quads (0.2–1.5 voxels
-//!   across, random orientations) scattered through the crowns of 300 "trees" (emitted tree by
-//!   tree), over a ground plane spanning the grid;
-//! - `torus_120k`: a smooth torus of ~120 k triangles filling the grid.
+//! triangle lists, on the scenes the issue names:
+//! - `forest_1.2M`: the procedural forest sized to 1.2 M triangles
+//!   (`ForestParams::with_target_triangles(1_200_000)`: ground, trunks, branches, leaf quads);
+//! - `engine_121k`: the 2CylinderEngine glTF model of `assets/` (121 496 triangles);
+//! - `bunny_3.7k`: the bunny of `assets/`.
 //!
-//! The meshes are generated here, deterministically, because the procedural forest and the
-//! asset loaders are being written in parallel; swap in `builtin:forest` and a 120 k-triangle
-//! glTF model once they land. Targets (issue 2, 2 cores): ≥ 2 M triangles/s per core for the
-//! 1 M-triangle scene, occupancy only; < 80 ms for the 120 k-triangle model.
+//! Targets (issue 2, 2 cores): ≥ 2 M triangles/s per core for the 1 M+-triangle scene,
+//! occupancy only; < 80 ms for the 120 k-triangle model.
 //!
 //! Run with `cargo bench -p voxlod-cpu --bench voxelize`. On a machine shared with other
 //! work, wall-clock times include waiting for a core; `VOXLOD_BENCH_CPU_TIME=20 cargo bench -p
 //! voxlod-cpu --bench voxelize` instead prints, per voxelization, the wall time and the CPU time
 //! of all its threads (user + system, from `/proc/self/stat`) averaged over 20 calls.
 
-use std::f32::consts::TAU;
+#[path = "support/mod.rs"]
+mod support;
+
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::{IVec3, Vec3, vec3};
-use voxlod_cpu::random::rand_f32;
+use glam::IVec3;
 use voxlod_cpu::voxelize::lattice::Lattice;
 use voxlod_cpu::voxelize::raster::for_each_voxel;
 use voxlod_cpu::voxelize::{Mode, Options, voxelize};
 use voxlod_format::GridSpec;
 use voxlod_scene::Geometry;
+use voxlod_scene::procedural::{ForestParams, forest};
 
 const RES: u32 = 256;
-
-fn push_quad(g: &mut Geometry, corners: [Vec3; 4]) {
-    let base = g.positions.len() as u32;
-    g.positions.extend(corners);
-    g.indices.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
-}
-
-/// ~1 M triangles in a 100 × 40 × 100 box: a ground quad and 500 k leaf quads in 300 crowns.
-fn leaves(quads: u32) -> Geometry {
-    let mut g = Geometry::default();
-    let (w, h) = (100.0, 40.0);
-    push_quad(&mut g, [vec3(0.0, 0.0, 0.0), vec3(w, 0.0, 0.0), vec3(w, 0.0, w), vec3(0.0, 0.0, w)]);
-    let r = |i: u32, d: u32| rand_f32(i, 7, d);
-    let crowns: Vec<(Vec3, f32)> = (0..300)
-        .map(|t| {
-            let centre =
-                vec3(5.0 + 90.0 * r(t, 0), h * (0.3 + 0.5 * r(t, 1)), 5.0 + 90.0 * r(t, 2));
-            (centre, 3.0 + 5.0 * r(t, 3))
-        })
-        .collect();
-    let voxel = w / RES as f32;
-    for i in 0..quads {
-        // Tree by tree, as a procedural generator emits them.
-        let (centre, radius) = crowns[(i as u64 * 300 / quads as u64) as usize];
-        let q = |d: u32| rand_f32(i, 1, d);
-        // A point in the crown's ball, a random frame, a size of 0.2–1.5 voxels.
-        let dir = vec3(q(0) * 2.0 - 1.0, q(1) * 2.0 - 1.0, q(2) * 2.0 - 1.0);
-        let p = centre + dir.normalize_or_zero() * radius * q(3).cbrt();
-        let n = vec3(q(4) * 2.0 - 1.0, q(5) * 2.0 - 1.0, q(6) * 2.0 - 1.0).normalize_or(Vec3::Y);
-        let (s, c) = (q(7) * TAU).sin_cos();
-        let u = n.any_orthonormal_vector();
-        let u = u * c + n.cross(u) * s;
-        let v = n.cross(u);
-        let size = voxel * (0.2 + 1.3 * q(8));
-        let (u, v) = (u * size * 0.5, v * size * 0.5);
-        push_quad(&mut g, [p - u - v, p + u - v, p + u + v, p - u + v]);
-    }
-    g.normals = vec![Vec3::Y; g.positions.len()];
-    g
-}
-
-/// A torus with `major × minor` quads (2 triangles each), shared vertices.
-fn torus(major: u32, minor: u32) -> Geometry {
-    let mut g = Geometry::default();
-    let (big, small) = (1.0, 0.38);
-    for i in 0..major {
-        for j in 0..minor {
-            let (a, b) = (i as f32 / major as f32 * TAU, j as f32 / minor as f32 * TAU);
-            let ring = big + small * b.cos();
-            g.positions.push(vec3(ring * a.cos(), small * b.sin(), ring * a.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % major) * minor + j % minor;
-    for i in 0..major {
-        for j in 0..minor {
-            let (p, q, r, s) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            g.indices.extend([[p, q, r], [p, r, s]]);
-        }
-    }
-    g.normals = vec![Vec3::Y; g.positions.len()];
-    g
-}
 
 fn fitted(g: &Geometry) -> GridSpec {
     let (lo, hi) = g.bounds().expect("the scene has triangles");
@@ -198,19 +136,25 @@ fn raster_cpu_report(name: &str, g: &Geometry, n: u32) {
 }
 
 fn benches(c: &mut Criterion) {
-    let leaves = leaves(500_000);
-    let torus = torus(346, 174);
+    let forest = forest(&ForestParams::with_target_triangles(1_200_000))
+        .expect("valid forest parameters")
+        .geometry();
+    let scenes = [
+        ("forest_1.2M", forest),
+        ("engine_121k", support::engine().geometry()),
+        ("bunny_3.7k", support::bunny().geometry()),
+    ];
     if let Some(n) = std::env::var("VOXLOD_BENCH_CPU_TIME").ok().and_then(|n| n.parse().ok()) {
-        raster_cpu_report("leaves_1M", &leaves, n);
-        raster_cpu_report("torus_120k", &torus, n);
-        cpu_time_report("leaves_1M", &leaves, n);
-        cpu_time_report("torus_120k", &torus, n);
+        for (name, g) in &scenes {
+            raster_cpu_report(name, g, n);
+            cpu_time_report(name, g, n);
+        }
         return;
     }
-    bench_scene(c, "leaves_1M", &leaves);
-    bench_raster(c, "leaves_1M", &leaves);
-    bench_scene(c, "torus_120k", &torus);
-    bench_raster(c, "torus_120k", &torus);
+    for (name, g) in &scenes {
+        bench_scene(c, name, g);
+        bench_raster(c, name, g);
+    }
 }
 
 criterion_group!(voxelize_benches, benches);

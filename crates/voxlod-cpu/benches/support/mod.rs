@@ -29,6 +29,13 @@ pub fn bunny() -> Scene {
     }
 }
 
+/// The 2CylinderEngine glTF model of `assets/` (121 496 triangles).
+pub fn engine() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/2CylinderEngine/2CylinderEngine.glb");
+    Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// The large scene: the procedural forest at about 1 M triangles (alpha-masked leaves).
 pub fn large() -> Scene {
     forest(&ForestParams::with_target_triangles(1_000_000)).expect("forest parameters are valid")

@@ -1,0 +1,162 @@
+//! Command-line definitions (clap) of the `voxlod` tool.
+
+pub mod parse;
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// voxlod: voxelize triangle scenes, render them as voxels and as meshes, and measure the
+/// difference. With no command, runs the default experiment and writes out/report.md.
+#[derive(Debug, Parser)]
+#[command(name = "voxlod", version, about, long_about = None)]
+pub struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// No progress bars.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// What to do (default: `report`).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run the default experiment on the embedded scenes and write a report (the default).
+    Report(ReportArgs),
+    /// Voxelize a scene into a .vxl or .binvox file.
+    Voxelize(VoxelizeArgs),
+    /// Render the ground truth of a scene (mesh ray casting) to a PNG.
+    Render(RenderArgs),
+    /// Compare two images: MSE, PSNR, SSIM on 8-bit sRGB.
+    CompareImages(CompareArgs),
+    /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
+    Info(InfoArgs),
+    /// List the builtin scenes and their parameters.
+    Scenes,
+}
+
+/// `voxlod report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// Paper-scale settings: 128³ and 256³, 1024 rays per pixel (takes much longer).
+    #[arg(long)]
+    pub full: bool,
+    /// Output directory (keep in sync with `Default`).
+    #[arg(short, long, default_value = "out")]
+    pub output: PathBuf,
+    /// Print the summary as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl Default for ReportArgs {
+    /// What `voxlod` with no command runs: the same defaults as `voxlod report`.
+    fn default() -> Self {
+        Self { full: false, output: PathBuf::from("out"), json: false }
+    }
+}
+
+/// Voxelization mode.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    /// Every voxel a triangle touches.
+    Conservative,
+    /// 6-separating thin surface.
+    Thin,
+    /// Interior of a closed mesh.
+    Solid,
+}
+
+/// `voxlod voxelize`.
+#[derive(Debug, Args)]
+pub struct VoxelizeArgs {
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
+    pub scene: String,
+    /// Voxels along the longest axis of the scene's bounds.
+    #[arg(long, default_value_t = 128)]
+    pub res: u32,
+    /// Which voxels to set.
+    #[arg(long, value_enum, default_value_t = ModeArg::Conservative)]
+    pub mode: ModeArg,
+    /// Output file: .vxl (voxlod container) or .binvox.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
+    pub scene: String,
+    /// Camera `eye=X,Y,Z;target=X,Y,Z[;up=X,Y,Z][;fov=DEG]` (default: the scene's own or one
+    /// framing its bounds).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Light `dir=X,Y,Z[;irradiance=E]` (toward the light) or `point=X,Y,Z[;intensity=I]`.
+    #[arg(long)]
+    pub light: Option<String>,
+    /// Rays per pixel.
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+    /// Seed of the pixel sampling pattern.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Output PNG.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output.
+    #[arg(long)]
+    pub gbuffer: bool,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod compare-images`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Reference image.
+    pub a: PathBuf,
+    /// Test image.
+    pub b: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The file.
+    pub file: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_command_means_report_with_the_report_defaults() {
+        let explicit = Cli::parse_from(["voxlod", "report"]);
+        let Some(Command::Report(args)) = explicit.command else { panic!("parsed a report") };
+        let default = ReportArgs::default();
+        assert_eq!(
+            (args.full, &args.output, args.json),
+            (default.full, &default.output, default.json)
+        );
+        assert!(Cli::parse_from(["voxlod"]).command.is_none());
+    }
+}

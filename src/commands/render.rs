@@ -1,0 +1,126 @@
+//! `voxlod render`: the ground truth of a scene to a PNG (and optionally its G-buffer).
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use glam::Vec3;
+use voxlod::cpu::raycast::Bvh;
+use voxlod::cpu::render::ground_truth::{self, GBuffer, GTexel};
+use voxlod::scene::{Image, Srgb8Image};
+
+use super::{Ui, load_scene, print_json};
+use crate::cli::{RenderArgs, parse};
+
+#[derive(serde::Serialize)]
+struct Summary {
+    scene: String,
+    triangles: usize,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    bvh_seconds: f64,
+    render_seconds: f64,
+    rays_per_second: f64,
+    output: String,
+}
+
+/// Renders the ground truth of a scene.
+pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
+    let (width, height) = parse::size(&args.size)?;
+    let spinner = ui.spinner();
+    spinner.set_message(format!("loading {}", args.scene));
+    let mut scene = load_scene(&args.scene)?;
+    let camera = match &args.camera {
+        Some(s) => parse::camera(s, scene.default_camera()?)?,
+        None => scene.default_camera()?,
+    };
+    if let Some(s) = &args.light {
+        scene.lights = vec![parse::light(s)?];
+    }
+    let geometry = scene.geometry();
+    spinner.set_message(format!("building the BVH over {} triangles", geometry.triangle_count()));
+    let t = Instant::now();
+    let bvh = Bvh::new(&geometry)?;
+    let bvh_seconds = t.elapsed().as_secs_f64();
+    spinner.set_message(format!("rendering {width}×{height} at {} rays per pixel", args.spp));
+    let options = ground_truth::Options {
+        width,
+        height,
+        spp: args.spp,
+        seed: args.seed,
+        ambient: Vec3::splat(0.1),
+        shadows: true,
+    };
+    let t = Instant::now();
+    let out = ground_truth::render(&scene, &geometry, &bvh, &camera, &options)?;
+    let render_seconds = t.elapsed().as_secs_f64();
+    spinner.set_message(format!("writing {}", args.output.display()));
+    out.image
+        .save_png(&args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    if args.gbuffer {
+        write_gbuffer(&out.gbuffer, &args.output)?;
+    }
+    spinner.finish_and_clear();
+    let rays = width as f64 * height as f64 * args.spp as f64;
+    let summary = Summary {
+        scene: args.scene,
+        triangles: geometry.triangle_count(),
+        width,
+        height,
+        spp: args.spp,
+        seed: args.seed,
+        bvh_seconds,
+        render_seconds,
+        rays_per_second: rays / render_seconds,
+        output: args.output.display().to_string(),
+    };
+    if args.json {
+        return print_json(&summary);
+    }
+    println!(
+        "{} ({} triangles), {}×{} at {} rays/pixel: BVH {:.3} s, render {:.3} s \
+         ({:.2} M camera rays/s, shadow rays extra) → {}",
+        summary.scene,
+        summary.triangles,
+        width,
+        height,
+        summary.spp,
+        bvh_seconds,
+        render_seconds,
+        summary.rays_per_second / 1e6,
+        summary.output
+    );
+    Ok(())
+}
+
+/// Writes `<stem>.depth.png` (normalized distance, near = white), `<stem>.normal.png`
+/// (n·0.5+0.5) and `<stem>.albedo.png` next to `output`.
+fn write_gbuffer(g: &GBuffer, output: &Path) -> Result<()> {
+    let finite = g.texels.iter().map(|t| t.depth).filter(|d| d.is_finite());
+    let (near, far) = finite.fold((f32::INFINITY, 0.0f32), |(a, b), d| (a.min(d), b.max(d)));
+    let span = (far - near).max(1e-12);
+    let to_u8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+    let depth = layer(g, |t| {
+        let v = if t.depth.is_finite() { 1.0 - (t.depth - near) / span } else { 0.0 };
+        [to_u8(v); 3]
+    });
+    let normal = layer(g, |t| (t.normal * 0.5 + 0.5).to_array().map(to_u8));
+    let albedo = Image {
+        width: g.width,
+        height: g.height,
+        pixels: g.texels.iter().map(|t| t.albedo.extend(1.0)).collect(),
+    };
+    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
+    for (name, img) in [("depth", depth), ("normal", normal), ("albedo", albedo.to_srgb8())] {
+        let path = output.with_file_name(format!("{stem}.{name}.png"));
+        img.save_png(&path).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn layer(g: &GBuffer, f: impl Fn(&GTexel) -> [u8; 3]) -> Srgb8Image {
+    Srgb8Image { width: g.width, height: g.height, pixels: g.texels.iter().map(f).collect() }
+}

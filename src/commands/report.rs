@@ -1,0 +1,35 @@
+//! `voxlod report` (the default command): run the default experiment and write the report.
+
+use anyhow::{Context, Result};
+use voxlod::experiment::{self, Config};
+
+use super::{Ui, print_json};
+use crate::cli::ReportArgs;
+
+/// Runs the default experiment, writes `<output>/report.md` (+ assets, JSON) and prints the
+/// tables.
+pub fn report(ui: &Ui, args: ReportArgs) -> Result<()> {
+    let config = if args.full { Config::full() } else { Config::quick() };
+    let spinner = ui.spinner();
+    let progress = |msg: &str| spinner.set_message(msg.to_string());
+    let outcome = experiment::run(&config, &progress).context("running the experiment")?;
+    spinner.set_message(format!("writing {}", args.output.display()));
+    let written = outcome
+        .report
+        .write(&args.output)
+        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    spinner.finish_and_clear();
+    if args.json {
+        return print_json(&outcome.scenes);
+    }
+    for scene in &outcome.scenes {
+        println!("\n## {} ({} triangles)\n", scene.label, scene.triangles);
+        println!("{}", scene.table()?.to_markdown());
+    }
+    println!(
+        "\nreport written to {} in {:.1} s",
+        written.markdown.display(),
+        outcome.elapsed.as_secs_f64()
+    );
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! `voxlod voxelize`.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use voxlod::cpu::voxelize::{self, Mode};
+use voxlod::format::{GridSpec, Occupancy, binvox, vxl};
+
+use super::{Ui, load_scene, print_json};
+use crate::cli::{ModeArg, VoxelizeArgs};
+
+#[derive(serde::Serialize)]
+struct Summary {
+    scene: String,
+    triangles: usize,
+    mode: &'static str,
+    dims: [u32; 3],
+    voxel_size: f64,
+    origin: [f64; 3],
+    voxels: usize,
+    bricks: usize,
+    seconds: f64,
+    output: String,
+}
+
+/// Voxelizes a scene and writes a .vxl or .binvox file.
+pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
+    let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("vxl" | "binvox")) {
+        bail!("output {} must end in .vxl or .binvox", args.output.display());
+    }
+    let spinner = ui.spinner();
+    spinner.set_message(format!("loading {}", args.scene));
+    let scene = load_scene(&args.scene)?;
+    let geometry = scene.geometry();
+    let (lo, hi) = scene.bounds()?;
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), args.res)
+        .with_context(|| format!("fitting a {}³ grid to the scene", args.res))?;
+    let (mode, mode_name) = match args.mode {
+        ModeArg::Conservative => (Mode::Conservative, "conservative"),
+        ModeArg::Thin => (Mode::Thin, "thin"),
+        ModeArg::Solid => (Mode::Solid, "solid"),
+    };
+    spinner.set_message(format!(
+        "voxelizing {} triangles into {}",
+        geometry.triangle_count(),
+        grid.dims
+    ));
+    let start = Instant::now();
+    let options = voxelize::Options { mode, triangle_lists: false, ..Default::default() };
+    let vox = voxelize::voxelize(&geometry, &grid, &options).context("voxelizing")?;
+    let seconds = start.elapsed().as_secs_f64();
+    spinner.set_message(format!("writing {}", args.output.display()));
+    let occupancy = vox.voxels.map(|_| Occupancy);
+    let written = if ext.as_deref() == Some("vxl") {
+        let meta = [
+            ("scene".to_string(), args.scene.clone()),
+            ("mode".to_string(), mode_name.to_string()),
+            ("triangles".to_string(), geometry.triangle_count().to_string()),
+            ("generator".to_string(), format!("voxlod {}", env!("CARGO_PKG_VERSION"))),
+        ];
+        vxl::write(&args.output, &grid, &occupancy, &meta)
+    } else {
+        binvox::write(&args.output, &grid, &occupancy)
+    };
+    written.with_context(|| format!("writing {}", args.output.display()))?;
+    spinner.finish_and_clear();
+    let summary = Summary {
+        scene: args.scene,
+        triangles: geometry.triangle_count(),
+        mode: mode_name,
+        dims: grid.dims.to_array(),
+        voxel_size: grid.voxel_size,
+        origin: grid.origin.to_array(),
+        voxels: occupancy.len(),
+        bricks: occupancy.bricks().len(),
+        seconds,
+        output: args.output.display().to_string(),
+    };
+    if args.json {
+        return print_json(&summary);
+    }
+    println!(
+        "{} ({} triangles) → {} voxels ({} mode) in a {}×{}×{} grid of {} bricks, {:.3} s → {}",
+        summary.scene,
+        summary.triangles,
+        summary.voxels,
+        summary.mode,
+        summary.dims[0],
+        summary.dims[1],
+        summary.dims[2],
+        summary.bricks,
+        summary.seconds,
+        summary.output
+    );
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! The `voxlod` binary end to end: each subcommand on small inputs, JSON output, one-line
+//! errors with a non-zero exit, and no output file left behind by a failure.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn voxlod(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_voxlod"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .expect("the voxlod binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("voxlod-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout: {}\nstderr: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    serde_json::from_str(&ok(out)).expect("valid JSON on stdout")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn voxelize_then_info_round_trips_through_both_formats() {
+    let dir = temp_dir("voxelize");
+    for (file, mode) in [("bunny.vxl", "conservative"), ("bunny.binvox", "solid")] {
+        let path = dir.join(file);
+        let args = ["voxelize", "builtin:bunny", "--res", "24", "--mode", mode, "-o", s(&path)];
+        let summary = json(&voxlod(&[&args[..], &["--json"]].concat()));
+        let voxels = summary["voxels"].as_u64().unwrap();
+        assert!(voxels > 100, "{summary}");
+        let info = json(&voxlod(&["info", s(&path), "--json"]));
+        assert_eq!(info["voxels"].as_u64(), Some(voxels), "{info}");
+    }
+    let info = json(&voxlod(&["info", s(&dir.join("bunny.vxl")), "--json"]));
+    assert_eq!(info["meta"]["mode"], "conservative");
+    assert_eq!(info["checksum_ok"], true);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn render_and_compare_images() {
+    let dir = temp_dir("render");
+    let a = dir.join("a.png");
+    let b = dir.join("b.png");
+    for (path, seed) in [(&a, "0"), (&b, "1")] {
+        let args = ["render", "builtin:bunny", "--size", "48x40", "--spp", "4", "--seed", seed];
+        ok(&voxlod(&[&args[..], &["--gbuffer", "-o", s(path)]].concat()));
+    }
+    assert!(dir.join("a.depth.png").exists() && dir.join("a.normal.png").exists());
+    let same = json(&voxlod(&["compare-images", s(&a), s(&a), "--json"]));
+    assert_eq!(same["mse"], 0.0);
+    assert_eq!(same["ssim"], 1.0);
+    assert_eq!(same["psnr"], "inf");
+    let noisy = json(&voxlod(&["compare-images", s(&a), s(&b), "--json"]));
+    let (mse, ssim) = (noisy["mse"].as_f64().unwrap(), noisy["ssim"].as_f64().unwrap());
+    assert!(mse > 0.0 && mse < 0.01, "two seeds of the same render differ only by noise: {mse}");
+    assert!(ssim > 0.5 && ssim < 1.0, "{ssim}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn errors_are_one_line_nonzero_and_leave_no_file() {
+    let dir = temp_dir("errors");
+    let (vxl, txt, png) = (dir.join("never.vxl"), dir.join("x.txt"), dir.join("r.png"));
+    let cases: [(&[&str], &str); 6] = [
+        (&["voxelize", "builtin:nonesuch", "-o", s(&vxl)], "nonesuch"),
+        (&["voxelize", "builtin:bunny", "--res", "0", "-o", s(&vxl)], "too large"),
+        (&["voxelize", "missing.obj", "-o", s(&vxl)], "missing.obj"),
+        (&["voxelize", "builtin:bunny", "-o", s(&txt)], ".vxl or .binvox"),
+        (&["render", "builtin:bunny", "--size", "0x3", "-o", s(&png)], "0x3"),
+        (&["render", "builtin:bunny", "--camera", "eye=1,2", "-o", s(&png)], "eye"),
+    ];
+    for (args, needle) in cases {
+        let out = voxlod(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: '{needle}' not in {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert!(left.is_empty(), "files left behind: {left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_failed_write_keeps_the_previous_output() {
+    let dir = temp_dir("keep");
+    let path = dir.join("grid.vxl");
+    ok(&voxlod(&["voxelize", "builtin:bunny", "--res", "8", "-o", s(&path)]));
+    let before = std::fs::read(&path).unwrap();
+    // The scene fails to load after the output exists: the old file must survive untouched.
+    let out = voxlod(&["voxelize", "builtin:forest?trees=0", "-o", s(&path)]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read(&path).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn scenes_lists_builtins_with_parameters() {
+    let out = ok(&voxlod(&["scenes"]));
+    for name in ["bunny", "engine", "forest", "island"] {
+        assert!(out.contains(name), "{name} missing from:\n{out}");
+    }
+    assert!(out.contains("trees"));
+}

@@ -1,0 +1,57 @@
+//! The default experiment on a tiny configuration: every stage runs, the report is written,
+//! and the numbers it reports are consistent with each other.
+
+use std::time::Duration;
+
+use glam::Vec3;
+use voxlod::experiment::{self, Config, SceneCase};
+
+fn tiny() -> Config {
+    Config {
+        scenes: vec![SceneCase::new("builtin:bunny", "bunny")],
+        resolutions: vec![12, 48],
+        image_size: 40,
+        gt_spp: 16,
+        views: 2,
+        section_budget: Duration::from_secs(600),
+        ambient: Vec3::splat(0.1),
+    }
+}
+
+#[test]
+fn tiny_experiment_writes_a_consistent_report() {
+    let outcome = experiment::run(&tiny(), &|_| {}).unwrap();
+    let scene = &outcome.scenes[0];
+    assert_eq!(scene.triangles, 3674);
+    assert_eq!(scene.rows.len(), 2);
+    assert_eq!(scene.gt_noise.len(), 2);
+    for row in &scene.rows {
+        assert!(row.voxels > 0 && row.memory_bytes > 0);
+        for v in [row.mse.mean, row.mse.min, row.mse.max] {
+            assert!((0.0..1.0).contains(&v), "{row:?}");
+        }
+        assert!(row.mse.min <= row.mse.mean && row.mse.mean <= row.mse.max);
+        assert!(row.ssim.max <= 1.0 && row.ssim.min > 0.0, "{row:?}");
+    }
+    // Finer voxels follow the surface better: 48³ is closer to the mesh than 12³.
+    assert!(scene.rows[1].mse.mean < scene.rows[0].mse.mean, "{:?}", scene.rows);
+    // The ground truth's own noise is far below the baseline's error.
+    let noise = scene.gt_noise.iter().map(|m| m.mse).fold(0.0, f64::max);
+    assert!(noise < scene.rows[1].mse.min / 2.0, "noise {noise} vs {:?}", scene.rows[1].mse);
+
+    let dir = std::env::temp_dir().join(format!("voxlod-experiment-{}", std::process::id()));
+    let written = outcome.report.write(&dir).unwrap();
+    let md = std::fs::read_to_string(&written.markdown).unwrap();
+    assert!(md.contains("bunny") && md.contains("baseline (opaque cubes)"), "{md}");
+    assert!(md.contains("Ground-truth noise"));
+    assert!(dir.join("assets/ssim-vs-memory.svg").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_exhausted_budget_skips_resolutions_and_says_so() {
+    let config = Config { section_budget: Duration::ZERO, ..tiny() };
+    let outcome = experiment::run(&config, &|_| {}).unwrap();
+    assert_eq!(outcome.scenes[0].skipped, vec![12, 48]);
+    assert!(outcome.scenes[0].rows.is_empty());
+}
