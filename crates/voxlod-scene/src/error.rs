@@ -122,3 +122,8 @@ pub enum Error {
         path: PathBuf,
     },
 }
+
+/// Reads a whole file, naming it in the error.
+pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| Error::Io { op: "reading", path: path.to_owned(), source })
+}

@@ -39,7 +39,7 @@ use std::path::Path;
 
 use glam::Mat4;
 
-use crate::{Error, Mesh, Result, Scene};
+use crate::{Mesh, Result, Scene};
 
 /// What the glTF loader skipped, converted or repaired.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -66,11 +66,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// [`load`], also returning what was skipped or converted.
 pub fn load_with_report(path: &Path) -> Result<(Scene, LoadReport)> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        op: "reading",
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::error::read_file(path)?;
     load_from_bytes(path, &bytes, |p| std::fs::read(p))
 }
 

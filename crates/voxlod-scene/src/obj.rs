@@ -64,11 +64,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// [`load`], also returning what was skipped or repaired.
 pub fn load_with_report(path: &Path) -> Result<(Scene, LoadReport)> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        op: "reading",
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::error::read_file(path)?;
     load_from_bytes(path, &bytes, |p| std::fs::read(p))
 }
 

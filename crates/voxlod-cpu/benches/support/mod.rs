@@ -4,29 +4,19 @@
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use rayon::prelude::*;
 use voxlod_cpu::raycast::Bvh;
 use voxlod_scene::procedural::{ForestParams, forest};
-use voxlod_scene::{Camera, Geometry, Material, Mesh, Scene};
+use voxlod_scene::{Camera, Geometry, Scene};
 
 /// The image edge of the primary-ray benches (the 512×512).
 pub const SIZE: u32 = 512;
 
-/// The bunny of `assets/bunny/bunny.obj` (npm `bunny`, 3 674 triangles); if it cannot be
-/// loaded, a stand-in: a noise-displaced icosphere of 5 120 triangles, said on stderr.
+/// The bunny of `assets/bunny/bunny.obj` (npm `bunny`, 3 674 triangles).
 pub fn bunny() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
-    match Scene::load(&path) {
-        Ok(scene) => scene,
-        Err(e) => {
-            eprintln!(
-                "note: {} not loaded ({e}); using a displaced icosphere instead",
-                path.display()
-            );
-            bumpy_sphere(4)
-        }
-    }
+    Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// The 2CylinderEngine glTF model of `assets/` (121 496 triangles).
@@ -39,81 +29,6 @@ pub fn engine() -> Scene {
 /// The large scene: the procedural forest at about 1 M triangles (alpha-masked leaves).
 pub fn large() -> Scene {
     forest(&ForestParams::with_target_triangles(1_000_000)).expect("forest parameters are valid")
-}
-
-/// A closed icosphere subdivided `levels` times (20·4^levels triangles), its vertices moved
-/// radially by a smooth deterministic noise of ±15 %.
-pub fn bumpy_sphere(levels: u32) -> Scene {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut pos: Vec<Vec3> = [
-        [-1., t, 0.],
-        [1., t, 0.],
-        [-1., -t, 0.],
-        [1., -t, 0.],
-        [0., -1., t],
-        [0., 1., t],
-        [0., -1., -t],
-        [0., 1., -t],
-        [t, 0., -1.],
-        [t, 0., 1.],
-        [-t, 0., -1.],
-        [-t, 0., 1.],
-    ]
-    .iter()
-    .map(|&p| Vec3::from_array(p).normalize())
-    .collect();
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let mut m = |x: u32, y: u32| {
-                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
-                    pos.push(((pos[x as usize] + pos[y as usize]) * 0.5).normalize());
-                    pos.len() as u32 - 1
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    let noise = |p: Vec3| (3.1 * p.x).sin() * (2.3 * p.y + 1.0).sin() * (2.7 * p.z + 0.5).cos();
-    let mut mesh = Mesh {
-        name: "bumpy sphere".into(),
-        positions: pos.iter().map(|&p| p * (1.0 + 0.15 * noise(p))).collect(),
-        indices: tris,
-        material: 0,
-        ..Default::default()
-    };
-    mesh.compute_normals();
-    Scene {
-        name: "bumpy sphere".into(),
-        meshes: vec![mesh],
-        materials: vec![Material::default()],
-        ..Default::default()
-    }
 }
 
 /// The scene's framing view (its own camera, or one fitting its bounds): many rays miss.

@@ -55,75 +55,12 @@ pub(crate) fn cuboid(name: &str, lo: Vec3, hi: Vec3, material: usize) -> Mesh {
     m
 }
 
-/// A unit icosphere subdivided `levels` times (20·4^levels triangles), closed and consistently
-/// wound, with smooth normals; vertices are shared between triangles.
+/// An icosphere subdivided `levels` times (20·4^levels triangles), closed, with shared
+/// vertices and smooth normals: the scene crate's primitive, renamed.
 pub(crate) fn icosphere(name: &str, levels: u32, center: Vec3, radius: f32) -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut pos: Vec<Vec3> = [
-        (-1., t, 0.),
-        (1., t, 0.),
-        (-1., -t, 0.),
-        (1., -t, 0.),
-        (0., -1., t),
-        (0., 1., t),
-        (0., -1., -t),
-        (0., 1., -t),
-        (t, 0., -1.),
-        (t, 0., 1.),
-        (-t, 0., -1.),
-        (-t, 0., 1.),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
-                pos.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let ab = midpoint(a, b, &mut pos);
-            let bc = midpoint(b, c, &mut pos);
-            let ca = midpoint(c, a, &mut pos);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    Mesh {
-        name: name.into(),
-        normals: pos.clone(),
-        uvs: pos.iter().map(|p| Vec2::new(p.x * 0.5 + 0.5, p.y * 0.5 + 0.5)).collect(),
-        positions: pos.iter().map(|&p| center + p * radius).collect(),
-        indices: tris,
-        material: 0,
-        skin: None,
-    }
+    let mut m = voxlod_scene::procedural::primitives::icosphere(center, radius, levels);
+    m.name = name.into();
+    m
 }
 
 /// A scene of `meshes` with `materials`, a directional light and black background.
