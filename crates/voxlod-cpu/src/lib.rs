@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod appearance;
 mod error;
 pub mod random;
 pub mod raycast;

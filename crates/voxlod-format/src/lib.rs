@@ -13,6 +13,7 @@ mod error;
 pub mod grid;
 pub mod io;
 pub mod morton;
+pub mod records;
 pub mod vxl;
 
 pub use brickmap::{BRICK_EDGE, BRICK_VOXELS, BrickMap};

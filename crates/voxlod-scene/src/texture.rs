@@ -1,6 +1,6 @@
 //! [`Texture`]: an 8-bit RGBA image with a [`Sampler`], sampled bilinearly in linear space.
 
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use glam::{Vec2, Vec4};
 
@@ -44,22 +44,7 @@ pub struct Texture {
     pub sampler: Sampler,
 }
 
-/// sRGB byte → linear float, as a table.
-pub fn srgb_to_linear_table() -> &'static [f32; 256] {
-    static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
-    TABLE.get_or_init(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)))
-}
-
-/// The sRGB electro-optical transfer function (IEC 61966-2-1), for one channel in [0, 1].
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-}
-
-/// Inverse of [`srgb_to_linear`], clamping to [0, 1] first.
-pub fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-    if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
-}
+pub use voxlod_format::records::quant::{linear_to_srgb, srgb_to_linear, srgb_to_linear_table};
 
 /// Wraps texel index `i` (an integer-valued float, any magnitude) into `0..n`.
 fn wrap(i: f64, n: u32, mode: WrapMode) -> u32 {

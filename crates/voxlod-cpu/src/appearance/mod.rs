@@ -1,0 +1,94 @@
+//! Filtered voxel appearance (HPG 2023 paper, seed 000; design and every open choice in
+//! `docs/design/filtered-appearance.md`): per-voxel ray sampling from outside the voxel
+//! ([`samples`]), the records each representation fits to those samples, and how each record
+//! answers the two questions a voxel renderer asks — how much light does this voxel stop along
+//! a direction ([`Opacity`]), and what radiance does it send toward the viewer
+//! ([`Appearance::radiance`]).
+//!
+//! All representations are fitted from the same [`samples::VoxelSamples`] of a voxel, so their
+//! differences measure the representation, not the sampling.
+
+pub mod samples;
+
+use glam::Vec3;
+use voxlod_format::records::SpecularRecord;
+use voxlod_format::{BrickMap, GridSpec};
+use voxlod_scene::LightSample;
+
+/// How a voxel attenuates light along one direction: what a renderer caches per voxel and
+/// direction, and applies per ray with that ray's chord through the voxel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Opacity {
+    /// Classic alpha: the transmittance is multiplied by `1 − α`, whatever the chord
+    /// (Averages, virtual mesh + opacity subgrid).
+    Alpha(f32),
+    /// [VJK21] non-exponential transmittance: extinction `sigma` per voxel size and blend
+    /// `gamma`; a ray with chord `ℓ` (voxel units) updates `T ← min(T, f(f⁻¹(T, γ) + σℓ, γ))`.
+    NonExponential {
+        /// Extinction per voxel size.
+        sigma: f32,
+        /// Blend: 1 exponential, 0 linear.
+        gamma: f32,
+    },
+}
+
+/// A grid of per-voxel appearance records of type `R`, in the brick map's Morton order, with
+/// optional specular side records (present only for scenes with specular materials).
+#[derive(Clone, Debug)]
+pub struct AppearanceGrid<R> {
+    /// The grid.
+    pub grid: GridSpec,
+    /// One record per voxel that has appearance.
+    pub records: BrickMap<R>,
+    /// One specular record per voxel (same order), if the scene is specular anywhere.
+    pub specular: Option<Vec<SpecularRecord>>,
+}
+
+impl<R> AppearanceGrid<R> {
+    /// Bytes per voxel of the records themselves (record + specular side record), the
+    /// representation's cost without the sparse structure.
+    pub fn record_bytes(&self) -> usize {
+        size_of::<R>() + self.specular.as_ref().map_or(0, |_| size_of::<SpecularRecord>())
+    }
+
+    /// Heap bytes of the whole grid: brick map (headers, lookup, records) and specular records.
+    pub fn memory_bytes(&self) -> usize {
+        self.records.memory_bytes()
+            + self.specular.as_ref().map_or(0, |s| s.capacity() * size_of::<SpecularRecord>())
+    }
+}
+
+/// What a voxel renderer needs of a representation. Implemented by each record grid; the
+/// renderer caches both answers per voxel and frame for the direction from the voxel centre to
+/// the camera (and the light, for shadows).
+pub trait Appearance: Sync {
+    /// The grid the voxels live in.
+    fn grid(&self) -> &GridSpec;
+
+    /// Number of voxels with a record (indices `0..len()`, brick-map Morton order).
+    fn len(&self) -> usize;
+
+    /// Whether no voxel has a record.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Index of the record of voxel `c`, if it has one.
+    fn index_of(&self, c: glam::UVec3) -> Option<usize>;
+
+    /// How voxel `index` attenuates light travelling along unit direction `dir`.
+    fn opacity(&self, index: usize, dir: Vec3) -> Opacity;
+
+    /// Radiance voxel `index` sends toward the viewer: `to_viewer` is the unit direction from
+    /// the voxel toward the eye, `light` the light seen from the voxel centre, `visibility` its
+    /// shadow visibility in [0, 1], `ambient` the ambient term of [`crate::shading::shade`].
+    /// Every implementation shades with [`crate::shading::shade`].
+    fn radiance(
+        &self,
+        index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3;
+}
