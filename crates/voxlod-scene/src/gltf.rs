@@ -1,5 +1,5 @@
 //! glTF 2.0 loader (.gltf and .glb), on gltf-json's document model with voxlod's own data
-//! access, so that every malformed input is an [`Error::Gltf`] naming the file and the element
+//! access, so that every malformed input is an [`Error::Gltf`](crate::Error::Gltf) naming the file and the element
 //! (`nodes[3]`, `accessors[7]`, `buffers[0]`…), never a panic.
 //!
 //! What is loaded:

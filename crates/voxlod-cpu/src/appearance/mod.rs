@@ -9,6 +9,7 @@
 //! differences measure the representation, not the sampling.
 
 pub mod samples;
+pub mod transmittance;
 
 use glam::Vec3;
 use voxlod_format::records::SpecularRecord;
@@ -22,7 +23,7 @@ pub enum Opacity {
     /// Classic alpha: the transmittance is multiplied by `1 − α`, whatever the chord
     /// (Averages, virtual mesh + opacity subgrid).
     Alpha(f32),
-    /// [VJK21] non-exponential transmittance: extinction `sigma` per voxel size and blend
+    /// \[VJK21\] non-exponential transmittance: extinction `sigma` per voxel size and blend
     /// `gamma`; a ray with chord `ℓ` (voxel units) updates `T ← min(T, f(f⁻¹(T, γ) + σℓ, γ))`.
     NonExponential {
         /// Extinction per voxel size.
@@ -30,6 +31,20 @@ pub enum Opacity {
         /// Blend: 1 exponential, 0 linear.
         gamma: f32,
     },
+}
+
+impl Opacity {
+    /// The transmittance after a ray with transmittance `t` crosses the voxel over `chord`
+    /// voxel units.
+    #[inline]
+    pub fn apply(self, t: f32, chord: f32) -> f32 {
+        match self {
+            Opacity::Alpha(a) => t * (1.0 - a.clamp(0.0, 1.0)),
+            Opacity::NonExponential { sigma, gamma } => {
+                transmittance::compose(t, sigma, gamma, chord)
+            }
+        }
+    }
 }
 
 /// A grid of per-voxel appearance records of type `R`, in the brick map's Morton order, with

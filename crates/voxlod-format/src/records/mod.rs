@@ -22,7 +22,7 @@ use quant::{
     unorm8,
 };
 
-/// Range of the [VJK21] extinction σ, per voxel size: codes 1..=255 span 2⁻⁶ … 2⁸.
+/// Range of the \[VJK21\] extinction σ, per voxel size: codes 1..=255 span 2⁻⁶ … 2⁸.
 pub const SIGMA_RANGE: LogByte = LogByte { lo: -6.0, hi: 8.0 };
 /// Range of the virtual mesh's semi-axes, in voxel units: 2⁻⁵ … 2¹.
 pub const SCALE_RANGE: LogByte = LogByte { lo: -5.0, hi: 1.0 };
@@ -68,7 +68,7 @@ impl AverageRecord {
     }
 }
 
-/// [VJK21]: an SGGX distribution of normals (Heitz et al. 2015), the mean colour, and the
+/// \[VJK21\]: an SGGX distribution of normals (Heitz et al. 2015), the mean colour, and the
 /// non-exponential transmittance parameters σ (extinction per voxel size) and γ (blend between
 /// exponential, γ = 1, and linear, γ = 0). The paper's 11 bytes, plus one pad byte.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
