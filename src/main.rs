@@ -37,6 +37,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Voxelize(a) => commands::voxelize(&ui, a),
         cli::Command::Render(a) => commands::render(&ui, a),
         cli::Command::CompareImages(a) => commands::compare_images(a),
+        cli::Command::Compare(a) => commands::compare(&ui, a),
         cli::Command::Info(a) => commands::info(a),
         cli::Command::Scenes => commands::scenes(),
     }

@@ -33,6 +33,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Compare two images: MSE, PSNR, SSIM on 8-bit sRGB.
     CompareImages(CompareArgs),
+    /// Measure every filtered-appearance representation of a scene against its ground truth:
+    /// error, memory, precompute and render time, as tables, plots and an image grid.
+    Compare(CompareSceneArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
     /// List the builtin scenes and their parameters.
@@ -118,6 +121,37 @@ pub struct RenderArgs {
     #[arg(long)]
     pub gbuffer: bool,
     /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod compare`.
+#[derive(Debug, Args)]
+pub struct CompareSceneArgs {
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
+    pub scene: String,
+    /// Voxel resolutions (voxels along the longest axis), comma-separated.
+    #[arg(long, default_value = "128,256", value_delimiter = ',')]
+    pub res: Vec<u32>,
+    /// The higher image side rendered besides the one equal to each resolution (0: none).
+    #[arg(long, default_value_t = 512)]
+    pub image: u32,
+    /// Rays per pixel of the ground truth.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    /// Viewpoints (the scene's camera orbited about the vertical axis).
+    #[arg(long, default_value_t = 4)]
+    pub views: usize,
+    /// Sampling rays per voxel.
+    #[arg(long, default_value_t = 150)]
+    pub rays: u32,
+    /// Adaptive thresholds, comma-separated.
+    #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',')]
+    pub thresholds: Vec<f32>,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/compare")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
 }

@@ -1,6 +1,7 @@
 //! The `voxlod` subcommands. Each prints a human summary (or JSON with `--json`), writes its
 //! outputs atomically, and returns errors with context for `main` to print.
 
+mod compare;
 mod info;
 mod render;
 mod report;
@@ -12,6 +13,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+pub use compare::compare;
 pub use info::info;
 pub use render::render;
 pub use report::report;

@@ -11,7 +11,8 @@ use voxlod_eval::{ImageMetrics, compare, error_heatmap};
 use voxlod_format::GridSpec;
 use voxlod_scene::Srgb8Image;
 
-use super::{Config, SceneCase, Spread, orbit_views};
+use super::filtered::{self, FilteredResult, SceneInputs};
+use super::{Config, GroundTruths, SceneCase, Spread, ms, orbit_views};
 use crate::{Error, alloc};
 
 /// One row of a scene's table: the baseline at one resolution.
@@ -65,6 +66,8 @@ pub struct SceneResult {
     pub rows: Vec<BaselineRow>,
     /// Resolutions skipped because the section ran over its budget.
     pub skipped: Vec<u32>,
+    /// The filtered-appearance comparison, when configured.
+    pub filtered: Option<FilteredResult>,
     /// Wall time of the section.
     #[serde(serialize_with = "ser_secs")]
     pub elapsed: Duration,
@@ -76,10 +79,6 @@ pub struct SceneResult {
 
 fn ser_secs<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_f64(d.as_secs_f64())
-}
-
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
 }
 
 /// Runs one scene section.
@@ -187,6 +186,22 @@ pub fn run_scene(
         let heat = error_heatmap(&image, &gt[0], 0.25)?;
         images.push(LabeledImage::new(format!("|error| {}^3", row.resolution), heat));
     }
+    let filtered = match &config.filtered {
+        None => None,
+        Some(fc) => {
+            let mut truths = GroundTruths::new(&scene, &geometry, &bvh, &views, config, label);
+            truths.insert(size, gt);
+            let inputs = SceneInputs {
+                scene: &scene,
+                geometry: &geometry,
+                views: &views,
+                ambient: config.ambient,
+                label,
+            };
+            let over_budget = || start.elapsed() > config.section_budget;
+            Some(filtered::run(&inputs, fc, &mut truths, &over_budget, progress)?)
+        }
+    };
     Ok(SceneResult {
         label: label.clone(),
         spec: case.spec.clone(),
@@ -198,6 +213,7 @@ pub fn run_scene(
         gt_noise,
         rows,
         skipped,
+        filtered,
         elapsed: start.elapsed(),
         images,
     })
@@ -284,6 +300,38 @@ impl SceneResult {
             "View 0: ground truth, the baseline at each resolution, and its per-pixel error.",
             ImageGrid::new(self.images.len().min(6) as u32, self.images.clone()),
         );
+        if let Some(f) = &self.filtered {
+            report.heading(3, format!("{}: filtered appearance", self.label));
+            report.text(
+                "Every representation fitted from the same per-voxel sampling lines; render times \
+                 are per frame with the per-voxel cache cold (first frame of a view) and warm \
+                 (the same view again); bytes are per voxel with a record, the total including \
+                 the sparse brick map.",
+            );
+            for table in f.tables(&self.label)? {
+                report.text(format!("**{}**", table.name()));
+                report.table(table);
+            }
+            if !f.skipped.is_empty() {
+                report.text(format!(
+                    "Filtered appearance skipped (section over its time budget): {}.",
+                    f.skipped.iter().map(|r| format!("{r}³")).collect::<Vec<_>>().join(", ")
+                ));
+            }
+            for (res, figure) in &f.images {
+                report.images(
+                    format!("{}-filtered-{res}", self.label),
+                    format!(
+                        "{res}³ at {res}², view 0: ground truth, then each representation and its \
+                         per-pixel error (full scale 0.25)."
+                    ),
+                    ImageGrid::new(figure.len().div_ceil(2) as u32, figure.clone()),
+                );
+            }
+            for (name, plot) in f.plots(&self.label) {
+                report.plot(name, plot);
+            }
+        }
         Ok(())
     }
 }

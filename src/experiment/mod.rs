@@ -8,6 +8,7 @@
 //! resolutions are skipped and the report says so.
 
 mod baseline;
+mod filtered;
 mod views;
 
 use std::time::{Duration, Instant};
@@ -16,6 +17,7 @@ use glam::Vec3;
 use voxlod_eval::report::{Report, Series};
 
 pub use baseline::{BaselineRow, SceneResult};
+pub use filtered::{FilteredConfig, FilteredResult, MethodRow};
 pub use views::orbit_views;
 
 use crate::Error;
@@ -54,20 +56,24 @@ pub struct Config {
     pub section_budget: Duration,
     /// Ambient term of the shading, the same for the ground truth and every voxel renderer.
     pub ambient: Vec3,
+    /// The filtered-appearance comparison (None: the baseline only).
+    pub filtered: Option<FilteredConfig>,
 }
 
 impl Config {
-    /// The default run: three embedded scenes at 32³ to 256³, 128² images, 256 rays per pixel
-    /// for the ground truth, four views.
+    /// The default run: three embedded scenes, the baseline at 32³ to 256³, the filtered
+    /// representations at 64³ (64² and 128² images), 128 rays per pixel for the ground truth
+    /// (its measured noise is reported and far below the differences measured), three views.
     pub fn quick() -> Self {
         Self {
             scenes: default_scenes(),
             resolutions: vec![32, 64, 128, 256],
             image_size: 128,
-            gt_spp: 256,
-            views: 4,
+            gt_spp: 128,
+            views: 3,
             section_budget: Duration::from_secs(40),
             ambient: Vec3::splat(0.1),
+            filtered: Some(FilteredConfig::quick()),
         }
     }
 
@@ -79,6 +85,7 @@ impl Config {
             gt_spp: 1024,
             views: 4,
             section_budget: Duration::from_secs(900),
+            filtered: Some(FilteredConfig::full()),
             ..Self::quick()
         }
     }
@@ -202,5 +209,79 @@ impl Spread {
     /// `mean (min–max)` with `digits` decimals.
     pub fn display(&self, digits: usize) -> String {
         format!("{:.d$} ({:.d$}–{:.d$})", self.mean, self.min, self.max, d = digits)
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// Ground-truth images of one scene's views, rendered once per image side and kept.
+pub(crate) struct GroundTruths<'a> {
+    scene: &'a voxlod_scene::Scene,
+    geometry: &'a voxlod_scene::Geometry,
+    bvh: &'a voxlod_cpu::raycast::Bvh,
+    views: &'a [voxlod_scene::Camera],
+    spp: u32,
+    ambient: Vec3,
+    label: &'a str,
+    by_size: Vec<(u32, Vec<voxlod_scene::Srgb8Image>)>,
+}
+
+impl<'a> GroundTruths<'a> {
+    /// An empty set for `views` of `scene`.
+    pub(crate) fn new(
+        scene: &'a voxlod_scene::Scene,
+        geometry: &'a voxlod_scene::Geometry,
+        bvh: &'a voxlod_cpu::raycast::Bvh,
+        views: &'a [voxlod_scene::Camera],
+        config: &Config,
+        label: &'a str,
+    ) -> Self {
+        let (spp, ambient) = (config.gt_spp, config.ambient);
+        Self { scene, geometry, bvh, views, spp, ambient, label, by_size: Vec::new() }
+    }
+
+    /// Keeps images rendered elsewhere (seed 0) for side `size`.
+    pub(crate) fn insert(&mut self, size: u32, images: Vec<voxlod_scene::Srgb8Image>) {
+        self.by_size.push((size, images));
+    }
+
+    /// The seed-0 ground truth of every view at `size`², rendered on first use.
+    pub(crate) fn get(
+        &mut self,
+        size: u32,
+        progress: &(dyn Fn(&str) + Sync),
+    ) -> Result<&[voxlod_scene::Srgb8Image], Error> {
+        if let Some(i) = self.by_size.iter().position(|(s, _)| *s == size) {
+            return Ok(&self.by_size[i].1);
+        }
+        let options = voxlod_cpu::render::ground_truth::Options {
+            width: size,
+            height: size,
+            spp: self.spp,
+            seed: 0,
+            ambient: self.ambient,
+            shadows: true,
+        };
+        let mut images = Vec::new();
+        for (i, camera) in self.views.iter().enumerate() {
+            progress(&format!(
+                "{}: ground truth {size}², view {}/{}",
+                self.label,
+                i + 1,
+                self.views.len()
+            ));
+            let gt = voxlod_cpu::render::ground_truth::render(
+                self.scene,
+                self.geometry,
+                self.bvh,
+                camera,
+                &options,
+            )?;
+            images.push(gt.image.to_srgb8());
+        }
+        self.by_size.push((size, images));
+        Ok(&self.by_size.last().expect("just pushed").1)
     }
 }

@@ -123,3 +123,42 @@ fn scenes_lists_builtins_with_parameters() {
     }
     assert!(out.contains("trees"));
 }
+
+#[test]
+fn compare_measures_every_representation_and_rejects_bad_arguments() {
+    let dir = temp_dir("compare");
+    let out = voxlod(&[
+        "compare",
+        "builtin:cube",
+        "--res",
+        "12",
+        "--image",
+        "24",
+        "--spp",
+        "4",
+        "--views",
+        "1",
+        "--rays",
+        "32",
+        "--json",
+        "-o",
+        s(&dir),
+    ]);
+    let v = json(&out);
+    let rows = v[0]["filtered"]["rows"].as_array().expect("rows");
+    // 4 fixed methods + 3 Adaptive thresholds, at 12² and 24².
+    assert_eq!(rows.len(), 14, "{rows:?}");
+    assert!(dir.join("report.md").exists());
+
+    for (args, needle) in [
+        (vec!["compare", "builtin:cube", "--res", "0"], "--res 0"),
+        (vec!["compare", "builtin:cube", "--thresholds=-1"], "--thresholds"),
+        (vec!["compare", "no/such/file.obj", "--res", "8"], "no/such/file.obj"),
+    ] {
+        let out = voxlod(&args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use glam::Vec3;
-use voxlod::experiment::{self, Config, SceneCase};
+use voxlod::experiment::{self, Config, FilteredConfig, SceneCase};
 
 fn tiny() -> Config {
     Config {
@@ -15,8 +15,18 @@ fn tiny() -> Config {
         views: 2,
         section_budget: Duration::from_secs(600),
         ambient: Vec3::splat(0.1),
+        filtered: Some(FilteredConfig {
+            resolutions: vec![16],
+            higher_image: Some(40),
+            rays: 64,
+            heldout: 128,
+            thresholds: vec![0.1, 1e9],
+        }),
     }
 }
+
+const METHODS: [&str; 4] =
+    ["Averages", "[VJK21]", "virtual mesh (lines)", "virtual mesh (circles)"];
 
 #[test]
 fn tiny_experiment_writes_a_consistent_report() {
@@ -39,12 +49,34 @@ fn tiny_experiment_writes_a_consistent_report() {
     let noise = scene.gt_noise.iter().map(|m| m.mse).fold(0.0, f64::max);
     assert!(noise < scene.rows[1].mse.min / 2.0, "noise {noise} vs {:?}", scene.rows[1].mse);
 
+    // Every representation at 16³, rendered at 16² and 40², scored, with honest byte counts.
+    let filtered = scene.filtered.as_ref().unwrap();
+    assert_eq!(filtered.rows.len(), 2 * (METHODS.len() + 2), "{:?}", filtered.rows);
+    for row in &filtered.rows {
+        assert!(row.voxels > 0 && row.memory_bytes > 0, "{row:?}");
+        assert!(row.bytes_per_voxel >= row.record_bytes, "{row:?}");
+        assert!((0.0..1.0).contains(&row.mse.mean) && row.ssim.mean > 0.0, "{row:?}");
+        assert!(row.render_cold_ms > 0.0 && row.precompute_ms > 0.0, "{row:?}");
+    }
+    let bytes = |m: &str| filtered.rows.iter().find(|r| r.method == m).unwrap().record_bytes;
+    assert_eq!(bytes("Averages"), 8.0);
+    assert_eq!(bytes("[VJK21]"), 12.0);
+    assert_eq!(bytes("virtual mesh (lines)"), 136.0);
+    // An infinite threshold picks Averages everywhere: its tag plus its record.
+    let loose = filtered.rows.iter().find(|r| r.method.contains("1000000000")).unwrap();
+    assert_eq!(loose.mix, Some([1.0, 0.0, 0.0]));
+    assert_eq!(loose.record_bytes, 12.0);
+
     let dir = std::env::temp_dir().join(format!("voxlod-experiment-{}", std::process::id()));
     let written = outcome.report.write(&dir).unwrap();
     let md = std::fs::read_to_string(&written.markdown).unwrap();
     assert!(md.contains("bunny") && md.contains("baseline (opaque cubes)"), "{md}");
     assert!(md.contains("Ground-truth noise"));
     assert!(dir.join("assets/ssim-vs-memory.svg").exists());
+    assert!(md.contains("filtered appearance 16^3"), "{md}");
+    for m in METHODS {
+        assert!(md.contains(m), "{m} missing from the report");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -54,4 +86,5 @@ fn an_exhausted_budget_skips_resolutions_and_says_so() {
     let outcome = experiment::run(&config, &|_| {}).unwrap();
     assert_eq!(outcome.scenes[0].skipped, vec![12, 48]);
     assert!(outcome.scenes[0].rows.is_empty());
+    assert_eq!(outcome.scenes[0].filtered.as_ref().unwrap().skipped, vec![16]);
 }

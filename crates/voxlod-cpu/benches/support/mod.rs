@@ -115,3 +115,22 @@ pub fn single_core<T: Send>(f: impl FnOnce() -> T + Send) -> (T, std::time::Dura
         (out, thread_cpu_time() - start)
     })
 }
+
+/// The procedural forest at about `target` triangles (alpha-masked leaves).
+pub fn forest_of(target: u64) -> Scene {
+    forest(&ForestParams::with_target_triangles(target)).expect("forest parameters are valid")
+}
+
+/// Voxelizes `geometry` (conservative, with triangle lists) into the grid of `resolution`
+/// voxels along the longest side of `scene`'s bounds.
+pub fn voxelized(
+    scene: &Scene,
+    geometry: &Geometry,
+    resolution: u32,
+) -> voxlod_cpu::voxelize::Voxelization {
+    let (lo, hi) = scene.bounds().expect("a non-empty scene");
+    let grid = voxlod_format::GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), resolution)
+        .expect("a valid grid");
+    voxlod_cpu::voxelize::voxelize(geometry, &grid, &voxlod_cpu::voxelize::Options::default())
+        .expect("voxelized")
+}

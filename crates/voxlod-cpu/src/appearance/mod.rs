@@ -8,8 +8,17 @@
 //! All representations are fitted from the same [`samples::VoxelSamples`] of a voxel, so their
 //! differences measure the representation, not the sampling.
 
+pub mod adaptive;
+pub mod averages;
+pub mod eigen;
+pub mod precompute;
+pub mod sampler;
 pub mod samples;
+pub mod sggx;
+pub mod subgrid;
 pub mod transmittance;
+pub mod vjk;
+pub mod vmesh;
 
 use glam::Vec3;
 use voxlod_format::records::SpecularRecord;
@@ -101,6 +110,30 @@ pub trait Appearance: Sync {
     fn radiance(
         &self,
         index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3;
+}
+
+/// The per-voxel half of [`Appearance`]: what one record answers on its own, given the
+/// parameters its grid shares (for example the directional-opacity rule of the virtual mesh).
+/// Mixed grids ([`adaptive`]) and the Adaptive selector's error estimate evaluate records
+/// through it; every grid of one record type implements [`Appearance`] on top of it.
+pub trait RecordAppearance: Copy + Send + Sync {
+    /// Parameters shared by all records of a grid.
+    type Params: Copy + Send + Sync + Default + std::fmt::Debug;
+
+    /// How this voxel attenuates light travelling along unit direction `dir`.
+    fn opacity(&self, params: Self::Params, dir: Vec3) -> Opacity;
+
+    /// Radiance toward the viewer, as [`Appearance::radiance`]; `specular` is the voxel's
+    /// specular side record, if the grid has them.
+    fn radiance(
+        &self,
+        params: Self::Params,
+        specular: Option<&SpecularRecord>,
         to_viewer: Vec3,
         light: &LightSample,
         visibility: f32,

@@ -47,4 +47,14 @@ impl VoxelSamples {
     pub fn surfaces(&self) -> impl Iterator<Item = &SurfaceSample> + '_ {
         self.rays.iter().filter_map(|r| r.surface.as_ref())
     }
+
+    /// Number of occluded lines (any closest hit: case (a), back-facing, or outside the voxel).
+    pub fn occluded(&self) -> usize {
+        self.rays.iter().filter(|r| r.occluded).count()
+    }
+
+    /// Occluded lines over all lines (the Averages opacity, design note §2); 0 without lines.
+    pub fn opacity(&self) -> f32 {
+        if self.rays.is_empty() { 0.0 } else { self.occluded() as f32 / self.rays.len() as f32 }
+    }
 }

@@ -15,6 +15,7 @@
 pub mod baseline;
 pub mod bricks;
 pub mod dda;
+pub mod filtered;
 pub mod ground_truth;
 pub mod sampling;
 mod surface;

@@ -1,0 +1,76 @@
+//! Appearance precompute: ray sampling (150 lines per voxel) plus the Averages fit, on the
+//! bunny at 256³ and the forest (~200 k triangles) at 256³, on one thread and on every core.
+//! Throughput is in voxels per second (criterion's elements).
+//!
+//! `cargo bench -p voxlod-cpu --bench precompute`; before the criterion runs it prints
+//! single-core CPU times (which other processes on the machine do not distort) and the
+//! issue's target, 50 000 voxels/s per core on the bunny at 256³. Set `VOXLOD_BENCH_SUBGRID=1`
+//! to also time the subgrid build.
+
+mod support;
+
+use std::hint::black_box;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+use voxlod_cpu::appearance::sampler::SamplingContext;
+use voxlod_cpu::appearance::{averages, subgrid};
+use voxlod_scene::Scene;
+
+use support::{bunny, forest_of, pool, single_core, voxelized};
+
+/// The issue's target on the bunny at 256³.
+const TARGET_PER_CORE: f64 = 50_000.0;
+
+fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene, res: u32, samples: usize) {
+    let geometry = scene.geometry();
+    let vox = voxelized(scene, &geometry, res);
+    let ctx = SamplingContext::new(scene, &geometry, &vox).expect("a valid scene");
+    let opts = PrecomputeOptions::default();
+    let voxels = ctx.voxel_count() as u64;
+    let (grid, cpu) = single_core(|| precompute(&ctx, &opts, averages::fit).expect("fitted"));
+    let per_core = voxels as f64 / cpu.as_secs_f64();
+    eprintln!(
+        "{name} at {res}³ ({} triangles): {voxels} voxels ({:.2} triangles each), {} records; \
+         sampling + Averages at {} rays: {:.0} ms on one core (CPU time) = {per_core:.0} \
+         voxels/s per core{}",
+        geometry.triangle_count(),
+        vox.triangles.len() as f64 / voxels.max(1) as f64,
+        grid.records.len(),
+        opts.rays,
+        cpu.as_secs_f64() * 1e3,
+        if name == "bunny" {
+            format!(" (target {TARGET_PER_CORE:.0}: {:.2}×)", per_core / TARGET_PER_CORE)
+        } else {
+            String::new()
+        }
+    );
+    if std::env::var_os("VOXLOD_BENCH_SUBGRID").is_some() {
+        let (_, cpu) =
+            single_core(|| precompute(&ctx, &opts, |s| Some(subgrid::build(s))).expect("fitted"));
+        eprintln!(
+            "{name} at {res}³: sampling + subgrid build: {:.0} voxels/s per core",
+            voxels as f64 / cpu.as_secs_f64()
+        );
+    }
+
+    let mut group = c.benchmark_group("precompute");
+    group.sample_size(samples);
+    group.throughput(Throughput::Elements(voxels));
+    let one = pool(1);
+    group.bench_function(format!("averages/{name}-{res}/1-thread"), |b| {
+        b.iter(|| one.install(|| black_box(precompute(&ctx, &opts, averages::fit).unwrap())))
+    });
+    group.bench_function(format!("averages/{name}-{res}/all-threads"), |b| {
+        b.iter(|| black_box(precompute(&ctx, &opts, averages::fit).unwrap()))
+    });
+    group.finish();
+}
+
+fn precomputes(c: &mut Criterion) {
+    bench_scene(c, "bunny", &bunny(), 256, 10);
+    bench_scene(c, "forest", &forest_of(200_000), 256, 10);
+}
+
+criterion_group!(benches, precomputes);
+criterion_main!(benches);

@@ -1,0 +1,570 @@
+//! Adaptive representation (beyond the HPG 2023 paper, which suggests it in its conclusion):
+//! per voxel, the cheapest of Averages (8 B), \[VJK21\] (12 B) and the virtual mesh with its
+//! opacity subgrid (136 B) whose **directional error** is at most a threshold τ; a voxel whose
+//! candidates all exceed τ keeps the one with the smallest error. One parameter dials memory
+//! against quality, and every voxel pays a 4-byte [`AdaptiveRef`] type tag.
+//!
+//! # The directional error
+//!
+//! Measured on **held-out rays**: `heldout` lines per voxel drawn by the same sampler as the
+//! fit but with sample indices `rays..rays + heldout`, so they are independent of the rays the
+//! records were fitted to (fitting and scoring on the same 150 rays would reward over-fitting).
+//! Each held-out line goes to the nearest of [`BINS`] fixed directions (the 6 axes and the 8
+//! diagonals); with the default 512 held-out lines a bin holds about 37, so a bin's empirical
+//! opacity has a standard error of at most 0.08 and the mean over 14 bins about 0.02 — which
+//! is why thresholds below about 0.02 separate nothing but noise. The error of a record is
+//!
+//! `E = mean_b |α̂_b − α_b| + mean_{b,j} |L̂_bj − L_bj|`
+//!
+//! - `α_b`: the fraction of the bin's held-out lines that hit a triangle of the voxel (booked as
+//!   for the fit, design note §1); `α̂_b`: the record's opacity, `1 − T` after one crossing with
+//!   each held-out line's own chord (so \[VJK21\]'s chord dependence is scored), averaged over
+//!   the bin's lines, with the record's opacity for the bin direction.
+//! - `L_bj`: for each of [`LIGHTS`] fixed unit light directions `l_j`, the mean over the bin's
+//!   front-facing in-voxel hits (case (a)) of the Lambert response `lum(albedo)·max(n·l_j, 0)`;
+//!   `L̂_bj`: the luminance of the record's own radiance toward the viewer `−d_b` under a unit
+//!   directional light `l_j` (irradiance π, so [`crate::shading::shade`]'s Lambert term is
+//!   `albedo·max(n·l, 0)`), no shadow, no ambient. Only bins with at least [`MIN_SURFACE_HITS`]
+//!   such hits count.
+//!
+//! Both terms are on a [0, 1] scale per unit albedo, so τ reads as "mean absolute error in
+//! opacity plus in Lambert shading".
+//!
+//! # Mixed grids along a ray
+//!
+//! Each voxel applies its own update to the running transmittance `T` (design note §4(e)):
+//! Averages and virtual-mesh voxels `T ← T(1 − α)`; \[VJK21\] voxels
+//! `T ← min(T, f(f⁻¹(T, γ) + σℓ, γ))`, whose `f⁻¹` reinterprets whatever `T` arrived as its own
+//! equivalent optical depth. Both updates are monotone and keep `T` in [0, 1], so any order of
+//! kinds composes; this is [`Opacity::apply`], the same code path as the single-kind grids.
+
+use glam::{UVec3, Vec3};
+use rayon::prelude::*;
+use voxlod_format::records::{
+    AdaptiveRef, AverageRecord, Kind, SggxRecord, SpecularRecord, VirtualMeshRecord,
+};
+use voxlod_format::{BrickMap, GridSpec, morton};
+use voxlod_scene::{LightSample, MaterialSample};
+
+use super::sampler::SamplingContext;
+use super::samples::VoxelSamples;
+use super::subgrid::DirectionalRule;
+use super::{Appearance, Opacity, RecordAppearance, averages, precompute, sggx, vmesh};
+use crate::shading::shade;
+use crate::{Error, Result};
+
+/// Default number of held-out rays per voxel.
+pub const DEFAULT_HELDOUT: u32 = 512;
+
+/// Fewest case-(a) hits a direction bin needs before its shading error counts.
+pub const MIN_SURFACE_HITS: u32 = 4;
+
+const S: f32 = 0.577_350_3; // 1/√3
+
+/// The direction bins of the error: the 6 axes and the 8 diagonals.
+pub const BINS: [Vec3; 14] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+    Vec3::new(S, S, S),
+    Vec3::new(-S, S, S),
+    Vec3::new(S, -S, S),
+    Vec3::new(-S, -S, S),
+    Vec3::new(S, S, -S),
+    Vec3::new(-S, S, -S),
+    Vec3::new(S, -S, -S),
+    Vec3::new(-S, -S, -S),
+];
+
+/// The light directions of the shading error: the corners of a tetrahedron.
+pub const LIGHTS: [Vec3; 4] =
+    [Vec3::new(S, S, S), Vec3::new(S, -S, -S), Vec3::new(-S, S, -S), Vec3::new(-S, -S, S)];
+
+/// Settings of the Adaptive precompute.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveOptions {
+    /// Rays each candidate is fitted to (the paper's 150).
+    pub rays: u32,
+    /// Held-out rays per voxel for the error estimate.
+    pub heldout: u32,
+    /// Seed of the sampler.
+    pub seed: u32,
+    /// Directional-opacity rule and shading samples of the virtual-mesh candidate.
+    pub vmesh: VirtualMeshParams,
+}
+
+impl Default for AdaptiveOptions {
+    fn default() -> Self {
+        let p = precompute::PrecomputeOptions::default();
+        Self {
+            rays: p.rays,
+            heldout: DEFAULT_HELDOUT,
+            seed: p.seed,
+            vmesh: VirtualMeshParams::default(),
+        }
+    }
+}
+
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// Per-bin statistics of held-out lines: counts, occlusions, Lambert sums.
+struct HeldOut<'a> {
+    samples: &'a VoxelSamples,
+    /// Bin of each ray.
+    bin: Vec<u8>,
+    rays: [u32; 14],
+    occluded: [u32; 14],
+    hits: [u32; 14],
+    lambert: [[f32; 4]; 14],
+}
+
+impl<'a> HeldOut<'a> {
+    fn new(samples: &'a VoxelSamples) -> Self {
+        let mut h = HeldOut {
+            samples,
+            bin: Vec::with_capacity(samples.rays.len()),
+            rays: [0; 14],
+            occluded: [0; 14],
+            hits: [0; 14],
+            lambert: [[0.0; 4]; 14],
+        };
+        for r in &samples.rays {
+            let b = nearest_bin(r.dir);
+            h.bin.push(b as u8);
+            h.rays[b] += 1;
+            h.occluded[b] += u32::from(r.occluded);
+            if let Some(s) = &r.surface {
+                h.hits[b] += 1;
+                let a = luminance(s.albedo);
+                for (j, l) in LIGHTS.iter().enumerate() {
+                    h.lambert[b][j] += a * s.normal.dot(*l).max(0.0);
+                }
+            }
+        }
+        h
+    }
+
+    /// The directional error of `record` (module docs).
+    fn error<R: RecordAppearance>(
+        &self,
+        record: &R,
+        params: R::Params,
+        specular: Option<&SpecularRecord>,
+    ) -> f32 {
+        let mut opacity_sum = 0.0;
+        let mut opacity_bins = 0u32;
+        let mut shading_sum = 0.0;
+        let mut shading_terms = 0u32;
+        let mut predicted = [0.0f32; 14];
+        let mut ops = [Opacity::Alpha(0.0); 14];
+        for b in 0..14 {
+            if self.rays[b] > 0 {
+                ops[b] = record.opacity(params, BINS[b]);
+            }
+        }
+        for (r, &b) in self.samples.rays.iter().zip(&self.bin) {
+            predicted[b as usize] += 1.0 - ops[b as usize].apply(1.0, r.chord);
+        }
+        for b in 0..14 {
+            if self.rays[b] == 0 {
+                continue;
+            }
+            let n = self.rays[b] as f32;
+            opacity_sum += (predicted[b] / n - self.occluded[b] as f32 / n).abs();
+            opacity_bins += 1;
+            if self.hits[b] < MIN_SURFACE_HITS {
+                continue;
+            }
+            let to_viewer = -BINS[b];
+            for (j, l) in LIGHTS.iter().enumerate() {
+                let light = LightSample {
+                    to_light: *l,
+                    distance: f32::INFINITY,
+                    irradiance: Vec3::splat(std::f32::consts::PI),
+                };
+                let c = record.radiance(params, specular, to_viewer, &light, 1.0, Vec3::ZERO);
+                shading_sum += (luminance(c) - self.lambert[b][j] / self.hits[b] as f32).abs();
+                shading_terms += 1;
+            }
+        }
+        let o = if opacity_bins > 0 { opacity_sum / opacity_bins as f32 } else { 0.0 };
+        let s = if shading_terms > 0 { shading_sum / shading_terms as f32 } else { 0.0 };
+        o + s
+    }
+}
+
+fn nearest_bin(d: Vec3) -> usize {
+    let mut best = 0;
+    let mut best_dot = f32::NEG_INFINITY;
+    for (i, b) in BINS.iter().enumerate() {
+        let dot = b.dot(d);
+        if dot > best_dot {
+            best_dot = dot;
+            best = i;
+        }
+    }
+    best
+}
+
+/// The directional error of `record` on held-out samples of its voxel (module docs), exposed
+/// for tests and reports.
+pub fn directional_error<R: RecordAppearance>(
+    record: &R,
+    params: R::Params,
+    specular: Option<&SpecularRecord>,
+    heldout: &VoxelSamples,
+) -> f32 {
+    HeldOut::new(heldout).error(record, params, specular)
+}
+
+/// One voxel's three candidate records and their errors.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    code: u64,
+    average: AverageRecord,
+    sggx: SggxRecord,
+    vmesh: VirtualMeshRecord,
+    specular: Option<SpecularRecord>,
+    errors: [f32; 3],
+}
+
+/// All three candidates of every voxel with their held-out errors: built once, then
+/// [`Candidates::select`]ed at any number of thresholds.
+#[derive(Clone, Debug)]
+pub struct Candidates {
+    grid: GridSpec,
+    rule: VirtualMeshParams,
+    voxels: Vec<Candidate>,
+    specular: bool,
+}
+
+impl Candidates {
+    /// Fits the three candidates of every voxel (from the same `rays` samples) and scores each
+    /// on `heldout` further rays. Parallel over voxels; deterministic.
+    pub fn build(ctx: &SamplingContext<'_>, options: &AdaptiveOptions) -> Result<Self> {
+        if options.rays == 0 || options.heldout == 0 {
+            return Err(Error::InvalidParameter {
+                name: "rays/heldout",
+                value: format!("{}/{}", options.rays, options.heldout),
+                reason: "the fit and the error estimate each need at least one ray".into(),
+            });
+        }
+        let specular = ctx.has_specular();
+        let rule = options.vmesh;
+        let voxels: Vec<Candidate> = (0..ctx.voxel_count())
+            .into_par_iter()
+            .map_init(
+                || (VoxelSamples::default(), VoxelSamples::default()),
+                |(fit, held), i| {
+                    ctx.sample_voxel_seeded(i, options.seed, 0, options.rays, fit);
+                    let average = averages::fit(fit)?;
+                    let sggx = sggx::fit(fit)?;
+                    let vmesh = vmesh::fit(fit)?;
+                    let spec = specular.then(|| precompute::specular_record(fit));
+                    ctx.sample_voxel_seeded(i, options.seed, options.rays, options.heldout, held);
+                    let h = HeldOut::new(held);
+                    let errors = [
+                        h.error(&average, (), spec.as_ref()),
+                        h.error(&sggx, (), spec.as_ref()),
+                        h.error(&vmesh, rule, spec.as_ref()),
+                    ];
+                    Some(Candidate {
+                        code: morton::encode(ctx.coord(i)),
+                        average,
+                        sggx,
+                        vmesh,
+                        specular: spec,
+                        errors,
+                    })
+                },
+            )
+            .flatten()
+            .collect();
+        Ok(Self { grid: *ctx.grid(), rule, voxels, specular })
+    }
+
+    /// Voxels with candidates.
+    pub fn len(&self) -> usize {
+        self.voxels.len()
+    }
+
+    /// Whether no voxel has candidates.
+    pub fn is_empty(&self) -> bool {
+        self.voxels.is_empty()
+    }
+
+    /// Per voxel (brick-map Morton order), the held-out error of Averages, \[VJK21\] and the
+    /// virtual mesh.
+    pub fn errors(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
+        self.voxels.iter().map(|v| v.errors)
+    }
+
+    /// The kind chosen for a voxel with `errors` at `threshold`: the cheapest at most
+    /// `threshold`, else the one with the least error (the cheaper on ties).
+    pub fn choose(errors: [f32; 3], threshold: f32) -> Kind {
+        const KINDS: [Kind; 3] = [Kind::Average, Kind::Sggx, Kind::VirtualMesh];
+        if let Some(k) = (0..3).find(|&k| errors[k] <= threshold) {
+            return KINDS[k];
+        }
+        let mut best = 0;
+        for k in 1..3 {
+            if errors[k] < errors[best] {
+                best = k;
+            }
+        }
+        KINDS[best]
+    }
+
+    /// The mixed grid at `threshold`.
+    pub fn select(&self, threshold: f32) -> Result<AdaptiveGrid> {
+        if !(threshold.is_finite() && threshold >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "threshold",
+                value: threshold.to_string(),
+                reason: "must be finite and non-negative".into(),
+            });
+        }
+        let mut g = AdaptiveGrid {
+            grid: self.grid,
+            rule: self.rule,
+            refs: BrickMap::new(self.grid.dims),
+            averages: Vec::new(),
+            sggx: Vec::new(),
+            vmesh: Vec::new(),
+            specular: self.specular.then(Vec::new),
+        };
+        let mut refs = Vec::with_capacity(self.voxels.len());
+        for v in &self.voxels {
+            let kind = Self::choose(v.errors, threshold);
+            let index = match kind {
+                Kind::Average => push(&mut g.averages, v.average),
+                Kind::Sggx => push(&mut g.sggx, v.sggx),
+                Kind::VirtualMesh => push(&mut g.vmesh, v.vmesh),
+            };
+            let r =
+                AdaptiveRef::new(kind, index as u32).ok_or_else(|| Error::InvalidParameter {
+                    name: "voxels",
+                    value: index.to_string(),
+                    reason: format!(
+                        "an adaptive grid holds at most {} records per kind",
+                        AdaptiveRef::MAX_INDEX
+                    ),
+                })?;
+            refs.push((v.code, r));
+            if let (Some(s), Some(rec)) = (g.specular.as_mut(), v.specular) {
+                s.push(rec);
+            }
+        }
+        g.refs = BrickMap::from_morton_sorted(self.grid.dims, refs)?;
+        Ok(g)
+    }
+}
+
+fn push<T>(v: &mut Vec<T>, x: T) -> usize {
+    v.push(x);
+    v.len() - 1
+}
+
+/// A grid whose voxels each use one of the three representations: a brick map of
+/// [`AdaptiveRef`] tags and one flat record array per kind.
+#[derive(Clone, Debug)]
+pub struct AdaptiveGrid {
+    grid: GridSpec,
+    rule: VirtualMeshParams,
+    refs: BrickMap<AdaptiveRef>,
+    averages: Vec<AverageRecord>,
+    sggx: Vec<SggxRecord>,
+    vmesh: Vec<VirtualMeshRecord>,
+    specular: Option<Vec<SpecularRecord>>,
+}
+
+impl AdaptiveGrid {
+    /// Share of voxels of each kind (Averages, \[VJK21\], virtual mesh).
+    pub fn mix(&self) -> [f64; 3] {
+        let n = self.refs.len().max(1) as f64;
+        [self.averages.len() as f64 / n, self.sggx.len() as f64 / n, self.vmesh.len() as f64 / n]
+    }
+
+    /// Mean bytes of records per voxel: the type tag, the chosen record, the specular side
+    /// record.
+    pub fn record_bytes(&self) -> f64 {
+        let n = self.refs.len().max(1) as f64;
+        let records = self.averages.len() * size_of::<AverageRecord>()
+            + self.sggx.len() * size_of::<SggxRecord>()
+            + self.vmesh.len() * size_of::<VirtualMeshRecord>();
+        let specular = self.specular.as_ref().map_or(0, |_| size_of::<SpecularRecord>());
+        (size_of::<AdaptiveRef>() + specular) as f64 + records as f64 / n
+    }
+
+    /// Heap bytes: the tag brick map (headers, lookup, tags), the record arrays and the
+    /// specular records.
+    pub fn memory_bytes(&self) -> usize {
+        self.refs.memory_bytes()
+            + self.averages.capacity() * size_of::<AverageRecord>()
+            + self.sggx.capacity() * size_of::<SggxRecord>()
+            + self.vmesh.capacity() * size_of::<VirtualMeshRecord>()
+            + self.specular.as_ref().map_or(0, |s| s.capacity() * size_of::<SpecularRecord>())
+    }
+
+    /// The tag of voxel `index`.
+    pub fn tag(&self, index: usize) -> AdaptiveRef {
+        self.refs.values()[index]
+    }
+
+    fn specular(&self, index: usize) -> Option<&SpecularRecord> {
+        self.specular.as_ref().map(|s| &s[index])
+    }
+}
+
+impl Appearance for AdaptiveGrid {
+    fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+
+    fn len(&self) -> usize {
+        self.refs.len()
+    }
+
+    fn index_of(&self, c: UVec3) -> Option<usize> {
+        self.refs.index_of(c)
+    }
+
+    fn opacity(&self, index: usize, dir: Vec3) -> Opacity {
+        let r = self.tag(index);
+        let i = r.index() as usize;
+        match r.kind() {
+            Kind::Average => RecordAppearance::opacity(&self.averages[i], (), dir),
+            Kind::Sggx => RecordAppearance::opacity(&self.sggx[i], (), dir),
+            Kind::VirtualMesh => RecordAppearance::opacity(&self.vmesh[i], self.rule, dir),
+        }
+    }
+
+    fn radiance(
+        &self,
+        index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let r = self.tag(index);
+        let i = r.index() as usize;
+        let s = self.specular(index);
+        match r.kind() {
+            Kind::Average => {
+                self.averages[i].radiance((), s, to_viewer, light, visibility, ambient)
+            }
+            Kind::Sggx => self.sggx[i].radiance((), s, to_viewer, light, visibility, ambient),
+            Kind::VirtualMesh => {
+                self.vmesh[i].radiance(self.rule, s, to_viewer, light, visibility, ambient)
+            }
+        }
+    }
+}
+
+/// Parameters of virtual-mesh records: the directional-opacity rule and the barycentric
+/// shading samples per distribution face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VirtualMeshParams {
+    /// How the opacity subgrid is read along a direction.
+    pub rule: DirectionalRule,
+    /// Barycentric samples per distribution face (0 reads as 1).
+    pub samples_per_face: u32,
+}
+
+impl Default for VirtualMeshParams {
+    fn default() -> Self {
+        Self { rule: DirectionalRule::default(), samples_per_face: vmesh::DEFAULT_SAMPLES_PER_FACE }
+    }
+}
+
+fn material(albedo: Vec3, specular: Option<&SpecularRecord>) -> MaterialSample {
+    MaterialSample {
+        albedo,
+        alpha: 1.0,
+        specular: Vec3::splat(specular.map_or(0.0, |s| s.level())),
+        shininess: specular.map_or(1.0, |s| s.exponent()),
+    }
+}
+
+impl RecordAppearance for AverageRecord {
+    type Params = ();
+
+    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
+        Opacity::Alpha(AverageRecord::opacity(self))
+    }
+
+    /// Shaded with the mean normal flipped toward the viewer (two-sided, as the ground truth
+    /// shades double-sided leaves); a voxel whose normal decoded to zero faces the viewer.
+    fn radiance(
+        &self,
+        _: (),
+        specular: Option<&SpecularRecord>,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let mut n = self.normal();
+        if n == Vec3::ZERO {
+            n = to_viewer;
+        } else if n.dot(to_viewer) < 0.0 {
+            n = -n;
+        }
+        shade(&material(self.color(), specular), n, to_viewer, light, visibility, ambient)
+    }
+}
+
+impl RecordAppearance for SggxRecord {
+    type Params = ();
+
+    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
+        Opacity::NonExponential { sigma: self.sigma_t(), gamma: self.gamma() }
+    }
+
+    fn radiance(
+        &self,
+        _: (),
+        specular: Option<&SpecularRecord>,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let m = material(self.color(), specular);
+        sggx::shade_record(self.matrix(), &m, to_viewer, light, visibility, ambient)
+    }
+}
+
+impl RecordAppearance for VirtualMeshRecord {
+    type Params = VirtualMeshParams;
+
+    fn opacity(&self, p: VirtualMeshParams, dir: Vec3) -> Opacity {
+        Opacity::Alpha(super::subgrid::directional_opacity(&self.opacity, dir, p.rule))
+    }
+
+    fn radiance(
+        &self,
+        p: VirtualMeshParams,
+        specular: Option<&SpecularRecord>,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        vmesh::shade_record(
+            self,
+            specular,
+            to_viewer,
+            light,
+            visibility,
+            ambient,
+            p.samples_per_face,
+        )
+    }
+}

@@ -1,0 +1,252 @@
+//! Averages (HPG 2023 §5; design note §2): one mean colour, one mean normal and one opacity per
+//! voxel, the paper's 7 bytes ([`AverageRecord`]), fitted by [`fit`] and rendered through the
+//! [`Appearance`] implementation of `AppearanceGrid<AverageRecord>`.
+//!
+//! # Rules (each has a unit test below)
+//! - **Opacity** = occluded lines / all lines: every line whose closest hit exists counts,
+//!   whether front- or back-facing, inside or outside the voxel (design note §1's booking).
+//! - **Colour** = arithmetic mean of the case-(a) albedos (linear), stored as sRGB8.
+//! - **Normal** = the normalized sum of the case-(a) shading normals. If the normals cancel,
+//!   `|Σn| < 10⁻³·count` (a thin double-sided leaf seen from both sides), it is the principal
+//!   eigenvector of `Σ n nᵀ` from [`symmetric_eigen`] instead, with its canonical sign.
+//! - **No record** for a voxel without a case-(a) hit (or without lines): the subgrid would
+//!   clear all 27 cells, so all representations agree on which voxels exist.
+//! - **Shading** is [`shade`] with the record's colour and normal, the specular side record's
+//!   level and exponent when the grid has them, and the normal **flipped toward the viewer**
+//!   when `n·v < 0`: a voxel is shaded two-sided, as the ground truth shades double-sided
+//!   leaves, since one mean normal cannot say which side a viewer sees. A record without a
+//!   normal (all-zero bytes, never produced by [`fit`]) is shaded facing the viewer.
+//! - **Opacity along a direction** is the record's opacity, whatever the direction and chord
+//!   ([`Opacity::Alpha`]).
+
+use glam::{DVec3, UVec3, Vec3};
+use voxlod_format::GridSpec;
+use voxlod_format::records::AverageRecord;
+use voxlod_scene::{LightSample, MaterialSample};
+
+use super::eigen::symmetric_eigen;
+use super::samples::VoxelSamples;
+use super::{Appearance, AppearanceGrid, Opacity};
+use crate::shading::shade;
+
+/// The Averages record of a voxel's samples (module docs), or `None` without a case-(a) hit.
+pub fn fit(samples: &VoxelSamples) -> Option<AverageRecord> {
+    let (mut count, mut albedo, mut normal) = (0u32, DVec3::ZERO, DVec3::ZERO);
+    let mut scatter = [[0.0f64; 3]; 3];
+    for s in samples.surfaces() {
+        count += 1;
+        albedo += s.albedo.as_dvec3();
+        let n = s.normal.as_dvec3();
+        normal += n;
+        for (i, row) in scatter.iter_mut().enumerate() {
+            for (j, m) in row.iter_mut().enumerate() {
+                *m += n[i] * n[j];
+            }
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let n = if normal.length() >= 1e-3 * count as f64 {
+        normal.normalize()
+    } else {
+        symmetric_eigen(scatter).1[0]
+    };
+    Some(AverageRecord::new((albedo / count as f64).as_vec3(), n.as_vec3(), samples.opacity()))
+}
+
+impl Appearance for AppearanceGrid<AverageRecord> {
+    fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+
+    fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    fn index_of(&self, c: UVec3) -> Option<usize> {
+        self.records.index_of(c)
+    }
+
+    fn opacity(&self, index: usize, _dir: Vec3) -> Opacity {
+        Opacity::Alpha(self.records.values()[index].opacity())
+    }
+
+    fn radiance(
+        &self,
+        index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let r = &self.records.values()[index];
+        let mut n = r.normal();
+        if n == Vec3::ZERO {
+            n = to_viewer;
+        } else if n.dot(to_viewer) < 0.0 {
+            n = -n;
+        }
+        let (specular, shininess) = match &self.specular {
+            Some(s) => (Vec3::splat(s[index].level()), s[index].exponent()),
+            None => (Vec3::ZERO, 0.0),
+        };
+        let m = MaterialSample { albedo: r.color(), alpha: 1.0, specular, shininess };
+        shade(&m, n, to_viewer, light, visibility, ambient)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::UVec3;
+    use voxlod_format::records::SpecularRecord;
+    use voxlod_format::{BrickMap, GridSpec};
+
+    use super::*;
+    use crate::appearance::samples::{RaySample, SurfaceSample};
+
+    fn line(occluded: bool, normal: Option<Vec3>, albedo: Vec3) -> RaySample {
+        RaySample {
+            dir: Vec3::NEG_Z,
+            entry: Vec3::new(0.5, 0.5, 1.0),
+            chord: 1.0,
+            occluded,
+            surface: normal.map(|normal| SurfaceSample {
+                point: Vec3::splat(0.5),
+                normal,
+                albedo,
+                specular: 0.0,
+                shininess: 0.0,
+            }),
+        }
+    }
+
+    fn samples(rays: Vec<RaySample>) -> VoxelSamples {
+        VoxelSamples { rays }
+    }
+
+    #[test]
+    fn opacity_counts_every_occluded_line_over_all_lines() {
+        let red = Vec3::new(0.8, 0.1, 0.1);
+        // 1 front hit, 2 occluded without a normal (back-facing or outside), 1 miss.
+        let s = samples(vec![
+            line(true, Some(Vec3::Z), red),
+            line(true, None, Vec3::ZERO),
+            line(true, None, Vec3::ZERO),
+            line(false, None, Vec3::ZERO),
+        ]);
+        let r = fit(&s).unwrap();
+        assert_eq!(r.opacity, 191, "round(255·3/4)");
+        assert!((r.color() - red).abs().max_element() < 0.01, "{}", r.color());
+        assert_eq!(r.normal(), Vec3::Z);
+        assert!((0.0..=1.0).contains(&r.opacity()));
+    }
+
+    #[test]
+    fn colour_and_normal_are_means_of_front_hits_only() {
+        let (a, b) = (Vec3::new(0.2, 0.4, 0.6), Vec3::new(0.6, 0.4, 0.2));
+        let s = samples(vec![
+            line(true, Some(Vec3::X), a),
+            line(true, Some(Vec3::Y), b),
+            line(true, None, Vec3::ONE),
+        ]);
+        let r = fit(&s).unwrap();
+        assert!((r.color() - (a + b) / 2.0).abs().max_element() < 0.01);
+        let n = Vec3::new(1.0, 1.0, 0.0).normalize();
+        assert!((r.normal() - n).length() < 0.02, "{}", r.normal());
+        assert_eq!(r.opacity, 255);
+    }
+
+    #[test]
+    fn no_front_hit_gives_no_record() {
+        assert_eq!(fit(&VoxelSamples::default()), None);
+        let s = samples(vec![line(true, None, Vec3::ONE), line(false, None, Vec3::ONE)]);
+        assert_eq!(fit(&s), None);
+    }
+
+    /// n and −n (a double-sided leaf seen from both sides) cancel: the normal is the principal
+    /// axis ±n with the canonical sign, finite and unit.
+    #[test]
+    fn cancelling_normals_fall_back_to_the_principal_axis() {
+        let n = Vec3::new(0.0, -0.6, 0.8);
+        let s = samples(vec![
+            line(true, Some(n), Vec3::ONE),
+            line(true, Some(-n), Vec3::ONE),
+            line(true, Some(n), Vec3::ONE),
+            line(true, Some(-n), Vec3::ONE),
+        ]);
+        let r = fit(&s).unwrap();
+        let m = r.normal();
+        assert!(m.is_finite() && (m.length() - 1.0).abs() < 1e-5);
+        assert!(m.dot(n).abs() > 0.999, "{m}");
+        assert!(m.z > 0.0, "canonical sign: largest component positive, {m}");
+    }
+
+    #[test]
+    fn quantization_round_trips_within_half_an_lsb() {
+        for k in 0..=20 {
+            let o = k as f32 / 20.0;
+            let hits = (o * 1000.0).round() as usize;
+            let mut rays = vec![line(true, Some(Vec3::Z), Vec3::splat(0.3)); hits.max(1)];
+            rays.extend(vec![line(false, None, Vec3::ZERO); 1000 - hits.max(1)]);
+            let r = fit(&samples(rays)).unwrap();
+            let exact = hits.max(1) as f32 / 1000.0;
+            assert!((r.opacity() - exact).abs() <= 0.5 / 255.0 + 1e-6, "{o}: {}", r.opacity());
+        }
+    }
+
+    fn grid_of(
+        record: AverageRecord,
+        specular: Option<SpecularRecord>,
+    ) -> AppearanceGrid<AverageRecord> {
+        let grid = GridSpec::new(glam::DVec3::ZERO, 1.0, UVec3::splat(2)).unwrap();
+        let records = BrickMap::from_voxels(grid.dims, [(UVec3::ONE, record)]).unwrap();
+        AppearanceGrid { grid, records, specular: specular.map(|s| vec![s]) }
+    }
+
+    /// Two-sided shading: the normal is flipped toward the viewer, so a voxel seen from behind
+    /// shades like its mirror seen from the front; opacity ignores the direction.
+    #[test]
+    fn radiance_is_two_sided_and_uses_shade() {
+        let g = grid_of(AverageRecord::new(Vec3::splat(0.5), Vec3::Z, 0.6), None);
+        assert_eq!(g.len(), 1);
+        assert_eq!(g.index_of(UVec3::ONE), Some(0));
+        assert_eq!(g.index_of(UVec3::ZERO), None);
+        let light = LightSample {
+            to_light: Vec3::Z,
+            distance: f32::INFINITY,
+            irradiance: Vec3::splat(3.0),
+        };
+        let front = g.radiance(0, Vec3::new(0.0, 0.6, 0.8), &light, 1.0, Vec3::splat(0.1));
+        let m = MaterialSample {
+            albedo: g.records.values()[0].color(),
+            alpha: 1.0,
+            ..Default::default()
+        };
+        let expected = shade(&m, Vec3::Z, Vec3::new(0.0, 0.6, 0.8), &light, 1.0, Vec3::splat(0.1));
+        assert_eq!(front, expected);
+        let mirrored = LightSample { to_light: Vec3::NEG_Z, ..light };
+        let back = g.radiance(0, Vec3::new(0.0, 0.6, -0.8), &mirrored, 1.0, Vec3::splat(0.1));
+        assert!((back - front).abs().max_element() < 1e-6, "{back} vs {front}");
+        for d in [Vec3::X, Vec3::NEG_Z, Vec3::new(1.0, 2.0, 3.0).normalize()] {
+            assert_eq!(g.opacity(0, d), Opacity::Alpha(g.records.values()[0].opacity()));
+        }
+        // A normal-less record is shaded facing the viewer (finite, lit from the front).
+        let none = grid_of(AverageRecord { normal: [0; 3], ..g.records.values()[0] }, None);
+        let r = none.radiance(0, Vec3::Z, &light, 1.0, Vec3::ZERO);
+        assert!(r.is_finite() && r.x > 0.0);
+    }
+
+    #[test]
+    fn specular_side_records_add_a_highlight() {
+        let rec = AverageRecord::new(Vec3::splat(0.5), Vec3::Z, 1.0);
+        let diffuse = grid_of(rec, None);
+        let shiny = grid_of(rec, Some(SpecularRecord::new(0.5, 64.0)));
+        assert_eq!(shiny.record_bytes(), 10);
+        let light =
+            LightSample { to_light: Vec3::Z, distance: f32::INFINITY, irradiance: Vec3::ONE };
+        let d = diffuse.radiance(0, Vec3::Z, &light, 1.0, Vec3::ZERO);
+        let s = shiny.radiance(0, Vec3::Z, &light, 1.0, Vec3::ZERO);
+        assert!(s.x > d.x * 2.0, "{s} vs {d}");
+    }
+}

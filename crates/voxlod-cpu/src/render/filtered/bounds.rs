@@ -1,0 +1,182 @@
+//! Conservative bounds that end walks early without changing what they meet: where on screen
+//! and how far along a camera ray a voxel with a record can lie ([`ScreenTiles`], per brick), and
+//! how far a shadow ray toward a directional light can still meet one ([`LightBounds`], per
+//! voxel).
+//!
+//! Both only shorten a walk's `t_max` (or skip a ray that meets no allocated brick at all), so
+//! every voxel a walk visits before its end is visited with bit-identical `t` values: the
+//! image is the one of unbounded walks.
+
+use glam::{DVec2, DVec3, Vec2, Vec3};
+use voxlod_format::{BRICK_EDGE, BrickMap, GridSpec, morton};
+use voxlod_scene::camera::CameraFrame;
+
+/// Pixel edge of a screen tile.
+pub(super) const TILE: u32 = 8;
+
+/// Extra length, in voxel sizes, added to every bound (float rounding of the walks' `t`).
+const MARGIN_VOXELS: f64 = 2.0;
+
+/// The world-space corners of the allocated bricks of `map`, relative to the grid origin.
+fn brick_boxes<'a, T>(
+    map: &'a BrickMap<T>,
+    grid: &'a GridSpec,
+) -> impl Iterator<Item = [DVec3; 8]> + 'a {
+    let edge = BRICK_EDGE as f64 * grid.voxel_size;
+    map.bricks().iter().map(move |h| {
+        let lo = morton::decode(h.morton).as_dvec3() * edge;
+        std::array::from_fn(|i| {
+            lo + DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2 & 1) as f64) * edge
+        })
+    })
+}
+
+/// Per 8×8-pixel tile of one frame: whether a camera ray through it can meet an allocated
+/// brick (the tile overlaps, with a pixel of margin, the screen bounding box of a brick's
+/// projected corners), and the farthest distance from the eye of such a brick's corners.
+/// A brick wholly at or behind the eye plane covers no tile; one with only some corners there
+/// covers every tile with an infinite distance.
+pub(super) struct ScreenTiles {
+    columns: u32,
+    /// Per tile: the walk's `t_max`, or a negative value where no brick projects.
+    t_max: Vec<f32>,
+}
+
+impl ScreenTiles {
+    /// The tiles of `frame` over the allocated bricks of `map`.
+    pub fn new<T>(frame: &CameraFrame, map: &BrickMap<T>, grid: &GridSpec) -> Self {
+        let columns = frame.width.div_ceil(TILE);
+        let rows = frame.height.div_ceil(TILE);
+        let mut t_max = vec![-1.0f32; (columns * rows) as usize];
+        let margin = MARGIN_VOXELS * grid.voxel_size;
+        let eye = frame.eye.as_dvec3() - grid.origin;
+        for corners in brick_boxes(map, grid) {
+            let (mut lo, mut hi, mut far) = (Vec2::INFINITY, Vec2::NEG_INFINITY, 0.0f64);
+            let (mut behind, mut unprojected) = (0, 0);
+            for c in corners {
+                far = far.max((c - eye).length());
+                let world = (c + grid.origin).as_vec3();
+                match frame.project(world) {
+                    Some((p, _)) if p.is_finite() => {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                    Some(_) => unprojected += 1,
+                    None => behind += 1,
+                }
+            }
+            // Camera rays only go forward (positive depth): a brick wholly behind the eye plane
+            // is never met; one that straddles it may be met anywhere on screen.
+            if behind == 8 {
+                continue;
+            }
+            let far = (far * (1.0 + 1e-6) + margin) as f32;
+            if behind + unprojected > 0 {
+                t_max.iter_mut().for_each(|t| *t = f32::INFINITY);
+                break;
+            }
+            // Pixels [lo − 1, hi + 1], clamped to the image; nothing if the box is off screen.
+            let (w, h) = (frame.width as f32 - 1.0, frame.height as f32 - 1.0);
+            let (a, b) = ((lo - 1.0).max(Vec2::ZERO), (hi + 1.0).min(Vec2::new(w, h)));
+            if a.x > b.x || a.y > b.y {
+                continue;
+            }
+            let (a, b) = (a.as_uvec2() / TILE, b.as_uvec2() / TILE);
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    let t = &mut t_max[(y * columns + x) as usize];
+                    *t = t.max(far);
+                }
+            }
+        }
+        Self { columns, t_max }
+    }
+
+    /// The `t_max` of the camera rays of pixel `(x, y)`, `None` if they meet no brick.
+    #[inline]
+    pub fn t_max(&self, x: u32, y: u32) -> Option<f32> {
+        let t = self.t_max[((y / TILE) * self.columns + x / TILE) as usize];
+        (t >= 0.0).then_some(t)
+    }
+}
+
+/// For a directional light: in the plane perpendicular to the light, a grid of square cells
+/// (one voxel wide, or wider so that there are at most [`MAX_LIGHT_CELLS`] per side), each
+/// holding the largest height toward the light (`w = p·l`, grid-origin relative) of the
+/// voxels with a record whose projected box overlaps it. A shadow ray keeps its `(u, v)` and
+/// gains height at rate 1, so it leaves the last voxel it can meet at that height: past it
+/// (plus half a voxel of margin for float rounding) it meets nothing, and that is its `t_max`.
+#[derive(Clone, Debug)]
+pub(super) struct LightBounds {
+    /// Unit direction toward the light and the plane basis.
+    l: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    lo: DVec2,
+    cell: f64,
+    dims: [u32; 2],
+    /// Largest height per cell (`−∞` where no voxel projects).
+    top: Vec<f32>,
+    margin: f64,
+}
+
+/// Largest number of cells per side of a [`LightBounds`] map (4 MiB of heights).
+pub(super) const MAX_LIGHT_CELLS: u32 = 1024;
+
+impl LightBounds {
+    /// The bounds of `map`'s voxels for the light direction `to_light`.
+    pub fn new<T>(to_light: Vec3, map: &BrickMap<T>, grid: &GridSpec) -> Self {
+        let s = grid.voxel_size;
+        let l = to_light.as_dvec3().normalize();
+        let e1 = l.any_orthonormal_vector();
+        let e2 = l.cross(e1);
+        let size = grid.dims.as_dvec3() * s;
+        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        for i in 0..8 {
+            let c = DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2 & 1) as f64) * size;
+            let p = DVec2::new(c.dot(e1), c.dot(e2));
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let cell = s.max((hi - lo).max_element() / MAX_LIGHT_CELLS as f64 * (1.0 + 1e-9));
+        lo -= cell;
+        let dims = ((hi + cell - lo) / cell).ceil().as_uvec2().max(glam::UVec2::ONE);
+        let mut top = vec![f32::NEG_INFINITY; (dims.x * dims.y) as usize];
+        // A voxel's projected box and top: its centre's, plus half the projected cube.
+        let half = |a: DVec3| 0.5 * s * a.abs().element_sum();
+        let (h1, h2, hw) = (half(e1), half(e2), half(l));
+        for c in map.coords() {
+            let p = (c.as_dvec3() + 0.5) * s;
+            let uv = DVec2::new(p.dot(e1), p.dot(e2));
+            let r = DVec2::new(h1, h2) + cell * 1e-3;
+            let (c0, c1) = (((uv - r - lo) / cell).floor(), ((uv + r - lo) / cell).floor());
+            let w = (p.dot(l) + hw) as f32;
+            for y in c0.y.max(0.0) as u32..=(c1.y as u32).min(dims.y - 1) {
+                for x in c0.x.max(0.0) as u32..=(c1.x as u32).min(dims.x - 1) {
+                    let t = &mut top[(y * dims.x + x) as usize];
+                    *t = t.max(w);
+                }
+            }
+        }
+        let margin = 0.5 * s + 1e-6 * size.length();
+        Self { l, e1, e2, lo, cell, dims: [dims.x, dims.y], top, margin }
+    }
+
+    /// Heap bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.top.capacity() * size_of::<f32>()
+    }
+
+    /// The `t_max` of the shadow ray from the centre of voxel `voxel` (negative: it meets
+    /// nothing).
+    #[inline]
+    pub fn t_max(&self, grid: &GridSpec, voxel: glam::UVec3) -> f32 {
+        let p = (voxel.as_dvec3() + 0.5) * grid.voxel_size;
+        let c = ((DVec2::new(p.dot(self.e1), p.dot(self.e2)) - self.lo) / self.cell).floor();
+        if c.x < 0.0 || c.y < 0.0 || c.x >= self.dims[0] as f64 || c.y >= self.dims[1] as f64 {
+            return -1.0;
+        }
+        let top = self.top[(c.y as u32 * self.dims[0] + c.x as u32) as usize];
+        (top as f64 - p.dot(self.l) + self.margin) as f32
+    }
+}

@@ -1,0 +1,131 @@
+//! The voxel look-up of the filtered renderer: which voxels have a record, and which record.
+//!
+//! The brick map (Morton order, what the DDA's brick look-ups and the bounds read) is mirrored
+//! by one [`LinearBrick`] per brick whose occupancy mask is in linear order
+//! (`x + 8y + 64z` within the brick) with per-word prefix counts, so the test a walk makes at
+//! every voxel it visits is a shift and a mask, and the record index of an occupied voxel one
+//! popcount away — instead of a Morton encoding per visited voxel.
+
+use glam::UVec3;
+use voxlod_format::{BRICK_EDGE, BrickMap, Result, morton};
+
+use crate::render::bricks::DenseBricks;
+
+/// One brick's occupancy in linear order.
+#[derive(Clone, Copy, Debug, Default)]
+struct LinearBrick {
+    /// Bit `x + 8y` of word `z`: voxel `(x, y, z)` of the brick has a record.
+    mask: [u64; 8],
+    /// Set bits in the words before each word.
+    before: [u16; 8],
+    /// Index in `records` of the brick's first voxel.
+    first: u32,
+}
+
+/// The voxels with a record: a brick map (for brick look-ups and iteration), its dense brick
+/// table when one fits, and the linear-order occupancy with each voxel's record index.
+pub(super) struct VoxelLookup {
+    pub map: BrickMap<()>,
+    pub dense: Option<DenseBricks>,
+    bricks: Vec<LinearBrick>,
+    records: Vec<u32>,
+}
+
+/// The position of local voxel `l` (each coordinate in `0..8`) in a brick's linear order.
+#[inline(always)]
+fn linear(l: UVec3) -> u32 {
+    l.x | l.y << 3 | l.z << 6
+}
+
+impl VoxelLookup {
+    /// The look-up of `found`: `(Morton code, record index)` in strictly increasing code order.
+    pub fn new(dims: UVec3, found: &[(u64, u32)]) -> Result<Self> {
+        let map = BrickMap::from_morton_sorted(dims, found.iter().map(|&(c, _)| (c, ())))?;
+        let dense = DenseBricks::new(&map);
+        let mut bricks = Vec::with_capacity(map.bricks().len());
+        let mut records = vec![0u32; found.len()];
+        let mut rest = found;
+        for h in map.bricks() {
+            let (mine, next) = rest.split_at(h.count() as usize);
+            rest = next;
+            let mut b = LinearBrick { first: h.first, ..Default::default() };
+            let mut local: Vec<(u32, u32)> = mine
+                .iter()
+                .map(|&(code, record)| (linear(morton::decode(code) % BRICK_EDGE), record))
+                .collect();
+            local.sort_unstable();
+            for (rank, &(l, record)) in local.iter().enumerate() {
+                b.mask[(l >> 6) as usize] |= 1 << (l & 63);
+                records[h.first as usize + rank] = record;
+            }
+            let mut count = 0u16;
+            for w in 0..8 {
+                b.before[w] = count;
+                count += b.mask[w].count_ones() as u16;
+            }
+            bricks.push(b);
+        }
+        Ok(Self { map, dense, bricks, records })
+    }
+
+    /// The record index of `voxel`, which lies in brick number `brick` of the map (as
+    /// [`crate::render::dda::DdaVoxel::brick`] reports it), if the voxel has one.
+    #[inline(always)]
+    pub fn record(&self, brick: u32, voxel: UVec3) -> Option<usize> {
+        let b = self.bricks.get(brick as usize)?;
+        let l = voxel % BRICK_EDGE;
+        let word = b.mask[l.z as usize];
+        let bit = l.x | l.y << 3;
+        if word >> bit & 1 == 0 {
+            return None;
+        }
+        let rank = b.first + b.before[l.z as usize] as u32 + (word & ((1 << bit) - 1)).count_ones();
+        Some(self.records[rank as usize] as usize)
+    }
+
+    /// Heap bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.map.memory_bytes()
+            + self.dense.as_ref().map_or(0, DenseBricks::memory_bytes)
+            + self.bricks.capacity() * size_of::<LinearBrick>()
+            + self.records.capacity() * size_of::<u32>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::random::rand_u32;
+
+    #[test]
+    fn records_are_found_by_linear_masks_as_by_the_brick_map() {
+        let dims = UVec3::new(40, 17, 25);
+        let mut found: Vec<(u64, u32)> = (0..900u32)
+            .map(|i| {
+                let r = |k| rand_u32(i, 9, k);
+                let c = UVec3::new(r(0) % dims.x, r(1) % dims.y, r(2) % dims.z);
+                (morton::encode(c), r(3))
+            })
+            .collect();
+        found.sort_unstable_by_key(|f| f.0);
+        found.dedup_by_key(|f| f.0);
+        let lookup = VoxelLookup::new(dims, &found).unwrap();
+        let reference: BrickMap<u32> = BrickMap::from_morton_sorted(dims, found.clone()).unwrap();
+        let mut hits = 0;
+        for x in 0..dims.x {
+            for y in 0..dims.y {
+                for z in 0..dims.z {
+                    let c = UVec3::new(x, y, z);
+                    let got = lookup
+                        .map
+                        .brick_index(c / BRICK_EDGE)
+                        .and_then(|b| lookup.record(b as u32, c));
+                    assert_eq!(got, reference.get(c).map(|&r| r as usize), "{c}");
+                    hits += got.is_some() as usize;
+                }
+            }
+        }
+        assert_eq!(hits, found.len());
+        assert_eq!(lookup.record(u32::MAX, UVec3::ZERO), None);
+    }
+}

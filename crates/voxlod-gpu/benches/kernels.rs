@@ -1,0 +1,114 @@
+//! Each GPU kernel against its CPU reference, on the adapter `Context::new` picks
+//! (`VOXLOD_ADAPTER` selects another).
+//!
+//! **On a CPU adapter (Mesa's lavapipe, llvmpipe) the "GPU" figures are CPU timings of the GPU
+//! path** — the WGSL compiled by LLVM for this CPU, run by lavapipe's own thread pool — never
+//! GPU speed; the bench prints which adapter it used. GPU figures include the host-side
+//! preparation, the uploads, the dispatches and the readback (the whole call a user makes).
+//!
+//! - `voxelize`: the bunny (3.7 k triangles) and a 50 k-triangle forest, occupancy only, at
+//!   128³ and 256³; CPU reference `voxlod_cpu::voxelize` (rayon, all cores).
+//! - `raycast`: 256×256 primary rays on the bunny, framing view; CPU reference
+//!   `Bvh::intersect` in a loop on one thread; GPU with the BVH already uploaded.
+//!
+//! `cargo bench -p voxlod-gpu --bench kernels`
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::{UVec3, Vec3};
+use voxlod_cpu::raycast::Bvh;
+use voxlod_cpu::voxelize::{Mode, Options};
+use voxlod_format::GridSpec;
+use voxlod_gpu::Context;
+use voxlod_gpu::raycast::{RayCaster, primary_rays};
+use voxlod_gpu::voxelize::{VoxelizeOptions, Voxelizer};
+use voxlod_scene::{Camera, Geometry};
+
+fn bunny() -> Geometry {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
+    voxlod_scene::Scene::load(&path).expect("bunny").geometry()
+}
+
+fn forest() -> Geometry {
+    let p = voxlod_scene::procedural::forest::ForestParams::with_target_triangles(50_000);
+    voxlod_scene::procedural::forest::forest(&p).expect("forest").geometry()
+}
+
+fn context() -> Option<Context> {
+    match Context::new() {
+        Ok(ctx) => {
+            eprintln!("GPU path on: {}", ctx.summary());
+            if ctx.is_cpu() {
+                eprintln!("  (a CPU adapter: its figures are CPU timings of the GPU path)");
+            }
+            Some(ctx)
+        }
+        Err(e) => {
+            eprintln!("no GPU adapter, CPU only: {e}");
+            None
+        }
+    }
+}
+
+fn voxelize(c: &mut Criterion) {
+    let ctx = context();
+    let voxelizer = ctx.as_ref().map(|ctx| Voxelizer::new(ctx).expect("kernel compiles"));
+    let mut group = c.benchmark_group("voxelize_occupancy");
+    group.sample_size(10);
+    for (name, g) in [("bunny", bunny()), ("forest-50k", forest())] {
+        let (lo, hi) = g.bounds().unwrap();
+        group.throughput(Throughput::Elements(g.triangle_count() as u64));
+        for res in [128, 256] {
+            let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), res).unwrap();
+            let opts =
+                Options { mode: Mode::Conservative, triangle_lists: false, ..Default::default() };
+            group.bench_function(format!("{name}/{res}/cpu"), |b| {
+                b.iter(|| black_box(voxlod_cpu::voxelize::voxelize(&g, &grid, &opts).unwrap()))
+            });
+            if let Some(v) = &voxelizer {
+                let opts = VoxelizeOptions::default();
+                group.bench_function(format!("{name}/{res}/gpu-path"), |b| {
+                    b.iter(|| black_box(v.voxelize(&g, &grid, &opts).unwrap()))
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+fn raycast(c: &mut Criterion) {
+    let ctx = context();
+    let g = bunny();
+    let bvh = Bvh::new(&g).unwrap();
+    let (lo, hi) = g.bounds().unwrap();
+    let cam =
+        Camera::framing(Vec3::new(0.3, 0.2, 1.0), (lo + hi) * 0.5, (hi - lo).length() * 0.5, 40.0);
+    let size = UVec3::new(256, 256, 1);
+    let rays = primary_rays(&cam.frame(size.x, size.y));
+    let mut group = c.benchmark_group("primary_rays_256x256");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    group.bench_function("bunny/cpu-1-thread", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    let (o, d) = (Vec3::from_slice(&r.origin[..3]), Vec3::from_slice(&r.dir[..3]));
+                    bvh.intersect(o, d, r.origin[3], r.dir[3]).is_some()
+                })
+                .count()
+        })
+    });
+    if let Some(ctx) = &ctx {
+        let caster = RayCaster::new(ctx).unwrap();
+        let gpu = caster.upload(&bvh, &g).unwrap();
+        group.bench_function("bunny/gpu-path", |b| {
+            b.iter(|| black_box(caster.intersect(&gpu, &rays).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, voxelize, raycast);
+criterion_main!(benches);

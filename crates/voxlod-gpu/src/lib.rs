@@ -1,0 +1,26 @@
+//! voxlod's GPU backend on wgpu: a [`Context`] that picks an adapter and guards every
+//! allocation and dispatch, and WGSL kernels that mirror the CPU references of
+//! [`voxlod_cpu`], each checked against its reference by the equivalence suite
+//! (`tests/equivalence`, run by `cargo xtask test` on every adapter found).
+//!
+//! | kernel | CPU reference | agreement |
+//! |---|---|---|
+//! | [`voxelize`]: conservative / thin surface voxelization | [`voxlod_cpu::voxelize`] | exact (occupancy and triangles per voxel) |
+//! | [`raycast`]: closest hit of rays through a BVH | [`voxlod_cpu::raycast::Bvh::intersect`] | see [`raycast`] |
+//!
+//! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,
+//! so bad input gets the CPU path's errors; a GPU entry point never falls back to the CPU.
+//!
+//! Timings on a CPU adapter (Mesa's lavapipe, [`Context::is_cpu`]) are CPU timings of the GPU
+//! path, never GPU speed.
+
+#![warn(missing_docs)]
+
+pub mod context;
+mod error;
+pub mod layout;
+pub mod raycast;
+pub mod voxelize;
+
+pub use context::{AdapterSummary, Context, adapters};
+pub use error::{Error, Result};

@@ -1,0 +1,66 @@
+//! `voxlod compare <scene>`: the filtered-appearance trade-off of one scene.
+
+use std::time::Duration;
+
+use anyhow::{Context, Result, ensure};
+use voxlod::experiment::{self, Config, FilteredConfig, SceneCase};
+
+use super::{Ui, print_json};
+use crate::cli::CompareSceneArgs;
+
+/// Runs the comparison, writes `<output>/report.md` (+ images, plots, JSON) and prints the
+/// tables.
+pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
+    ensure!(!args.res.is_empty(), "--res needs at least one resolution");
+    for &r in &args.res {
+        ensure!((1..=4096).contains(&r), "--res {r} is out of range 1..=4096");
+    }
+    ensure!(args.spp > 0, "--spp must be at least 1");
+    ensure!(args.views > 0, "--views must be at least 1");
+    ensure!(args.rays > 0, "--rays must be at least 1");
+    for &t in &args.thresholds {
+        ensure!(t.is_finite() && t >= 0.0, "--thresholds: {t} is not a finite non-negative number");
+    }
+    let filtered = FilteredConfig {
+        resolutions: args.res.clone(),
+        higher_image: (args.image > 0).then_some(args.image),
+        rays: args.rays,
+        thresholds: args.thresholds.clone(),
+        ..FilteredConfig::quick()
+    };
+    let config = Config {
+        scenes: vec![SceneCase::new(&args.scene, "scene")],
+        resolutions: args.res.clone(),
+        image_size: args.res[0],
+        gt_spp: args.spp,
+        views: args.views,
+        section_budget: Duration::MAX,
+        filtered: Some(filtered),
+        ..Config::quick()
+    };
+    let spinner = ui.spinner();
+    let progress = |msg: &str| spinner.set_message(msg.to_string());
+    let outcome = experiment::run(&config, &progress)
+        .with_context(|| format!("comparing representations of '{}'", args.scene))?;
+    let written = outcome
+        .report
+        .write(&args.output)
+        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    spinner.finish_and_clear();
+    if args.json {
+        return print_json(&outcome.scenes);
+    }
+    for scene in &outcome.scenes {
+        if let Some(f) = &scene.filtered {
+            for table in f.tables(&scene.label)? {
+                println!("\n{}", table.to_markdown());
+            }
+        }
+    }
+    println!(
+        "\nreport written to {} in {:.1} s",
+        written.markdown.display(),
+        outcome.elapsed.as_secs_f64()
+    );
+    Ok(())
+}

@@ -1,0 +1,401 @@
+//! The filtered-appearance comparison of one scene (HPG 2023 paper, Tables 1 and 2,
+//! regenerated): at each voxel resolution, every representation is precomputed from the same
+//! per-voxel ray samples, rendered from the same cameras as the ground truth at an image size
+//! equal to the voxel resolution and at a higher one, and scored against the ground truth.
+//!
+//! Rows: Averages, \[VJK21\] (SGGX + non-exponential transmittance), the virtual mesh with the
+//! opacity subgrid (line-sampled directional opacity, and the paper's normalized circles as a
+//! second row), and Adaptive at each threshold of [`FilteredConfig::thresholds`].
+
+use std::time::{Duration, Instant};
+
+use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+use voxlod_cpu::appearance::sampler::SamplingContext;
+use voxlod_cpu::appearance::subgrid::DirectionalRule;
+use voxlod_cpu::appearance::vmesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::{Appearance, averages, sggx, vmesh};
+use voxlod_cpu::render::filtered::{self, FrameCache};
+use voxlod_cpu::voxelize::{self, Mode};
+use voxlod_eval::report::{Cell, Column, LabeledImage, NumberFormat, Plot, Series, Table};
+use voxlod_eval::{compare, error_heatmap};
+use voxlod_format::GridSpec;
+use voxlod_scene::{Camera, Geometry, Scene, Srgb8Image};
+
+use super::{GroundTruths, Spread, ms};
+use crate::Error;
+
+/// Settings of the filtered-appearance comparison.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilteredConfig {
+    /// Voxels along each scene's longest axis; each resolution is rendered at an image side
+    /// equal to it (as the paper does) and at [`FilteredConfig::higher_image`].
+    pub resolutions: Vec<u32>,
+    /// A second, higher image side rendered at every resolution (None: only the paper's).
+    pub higher_image: Option<u32>,
+    /// Sampling rays per voxel (the paper's 150).
+    pub rays: u32,
+    /// Held-out rays per voxel for the Adaptive selector's error estimate.
+    pub heldout: u32,
+    /// Adaptive thresholds, one report row each.
+    pub thresholds: Vec<f32>,
+}
+
+impl FilteredConfig {
+    /// The default run's settings.
+    pub fn quick() -> Self {
+        Self {
+            resolutions: vec![64],
+            higher_image: Some(128),
+            rays: 150,
+            heldout: adaptive::DEFAULT_HELDOUT,
+            thresholds: vec![0.1, 0.2, 0.3],
+        }
+    }
+
+    /// The paper's scale: 128³ and 256³.
+    pub fn full() -> Self {
+        Self { resolutions: vec![128, 256], higher_image: Some(512), ..Self::quick() }
+    }
+}
+
+/// One representation at one resolution and image size.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MethodRow {
+    /// Representation (and its parameter).
+    pub method: String,
+    /// Voxels along the longest axis.
+    pub resolution: u32,
+    /// Image side in pixels.
+    pub image: u32,
+    /// Voxels with a record.
+    pub voxels: usize,
+    /// Bytes of the records per voxel (record, specular side record, type tag).
+    pub record_bytes: f64,
+    /// Heap bytes of the whole grid (brick map, lookup, records) per voxel.
+    pub bytes_per_voxel: f64,
+    /// Heap bytes of the whole grid.
+    pub memory_bytes: usize,
+    /// Precompute time (sampling + fit), ms.
+    pub precompute_ms: f64,
+    /// Mean render time per frame over the views with a fresh per-voxel cache, ms.
+    pub render_cold_ms: f64,
+    /// Mean render time of the same frame again, cache warm, ms.
+    pub render_warm_ms: f64,
+    /// MSE against the ground truth, over views.
+    pub mse: Spread,
+    /// SSIM against the ground truth, over views.
+    pub ssim: Spread,
+    /// For Adaptive: the share of voxels of each kind (Averages, \[VJK21\], virtual mesh).
+    pub mix: Option<[f64; 3]>,
+}
+
+/// What the comparison of one scene produced.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct FilteredResult {
+    /// One row per method, resolution and image size.
+    pub rows: Vec<MethodRow>,
+    /// Resolutions skipped for the time budget.
+    pub skipped: Vec<u32>,
+    /// Per resolution: view 0 at the image side equal to the resolution — the ground truth,
+    /// then each method and its error heat map (the paper's Fig. 11).
+    #[serde(skip)]
+    pub images: Vec<(u32, Vec<LabeledImage>)>,
+}
+
+/// A precomputed representation, ready to render.
+struct Built {
+    method: String,
+    grid: Box<dyn Appearance>,
+    record_bytes: f64,
+    memory_bytes: usize,
+    precompute: Duration,
+    mix: Option<[f64; 3]>,
+}
+
+/// Everything a scene section shares.
+pub(super) struct SceneInputs<'a> {
+    pub scene: &'a Scene,
+    pub geometry: &'a Geometry,
+    pub views: &'a [Camera],
+    pub ambient: glam::Vec3,
+    pub label: &'a str,
+}
+
+/// Runs the comparison of one scene; `over_budget` says when to skip the remaining
+/// resolutions.
+pub(super) fn run(
+    inputs: &SceneInputs<'_>,
+    config: &FilteredConfig,
+    gt: &mut GroundTruths<'_>,
+    over_budget: &dyn Fn() -> bool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<FilteredResult, Error> {
+    let mut result = FilteredResult::default();
+    let (lo, hi) = inputs.scene.bounds()?;
+    let label = inputs.label;
+    for &res in &config.resolutions {
+        if over_budget() {
+            result.skipped.push(res);
+            continue;
+        }
+        progress(&format!("{label}: filtered {res}³: voxelizing"));
+        let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), res)?;
+        let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
+        let vox = voxelize::voxelize(inputs.geometry, &grid, &options)?;
+        let ctx = SamplingContext::new(inputs.scene, inputs.geometry, &vox)?;
+        let built = build_all(&ctx, config, &|m| progress(&format!("{label}: {res}³: {m}")))?;
+        drop(ctx);
+        drop(vox);
+
+        let mut sizes = vec![res];
+        if let Some(h) = config.higher_image.filter(|&h| h != res) {
+            sizes.push(h);
+        }
+        for &size in &sizes {
+            let references = gt.get(size, progress)?.to_vec();
+            let mut figure = vec![LabeledImage::new("ground truth", references[0].clone())];
+            let mut heat_maps = vec![LabeledImage::new("reference", references[0].clone())];
+            for b in &built {
+                progress(&format!("{label}: {res}³ {}: rendering {size}²", b.method));
+                let (row, first) = render_row(inputs, b, res, size, &references)?;
+                if size == res {
+                    let heat = error_heatmap(&first, &references[0], 0.25)?;
+                    figure.push(LabeledImage::new(b.method.clone(), first));
+                    heat_maps.push(LabeledImage::new(format!("|error| {}", b.method), heat));
+                }
+                result.rows.push(row);
+            }
+            if size == res {
+                figure.append(&mut heat_maps);
+                result.images.push((res, figure));
+            }
+        }
+    }
+    Ok(result)
+}
+
+/// Precomputes every representation from the same samples (each timed on its own: its
+/// precompute time is sampling plus its fit).
+fn build_all(
+    ctx: &SamplingContext<'_>,
+    config: &FilteredConfig,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<Built>, Error> {
+    let opts = PrecomputeOptions { rays: config.rays, ..Default::default() };
+    let mut built = Vec::new();
+
+    progress("Averages");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, averages::fit)?;
+    built.push(Built {
+        method: "Averages".into(),
+        record_bytes: g.record_bytes() as f64,
+        memory_bytes: g.memory_bytes(),
+        precompute: t.elapsed(),
+        grid: Box::new(g),
+        mix: None,
+    });
+
+    progress("[VJK21]");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, sggx::fit)?;
+    built.push(Built {
+        method: "[VJK21]".into(),
+        record_bytes: g.record_bytes() as f64,
+        memory_bytes: g.memory_bytes(),
+        precompute: t.elapsed(),
+        grid: Box::new(g),
+        mix: None,
+    });
+
+    progress("virtual mesh");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, vmesh::fit)?;
+    let precompute_vm = t.elapsed();
+    for (rule, name) in [
+        (DirectionalRule::Lines, "virtual mesh (lines)"),
+        (DirectionalRule::Circles, "virtual mesh (circles)"),
+    ] {
+        built.push(Built {
+            method: name.into(),
+            record_bytes: g.record_bytes() as f64,
+            memory_bytes: g.memory_bytes(),
+            precompute: precompute_vm,
+            grid: Box::new(VirtualMeshGrid { rule, ..VirtualMeshGrid::new(g.clone()) }),
+            mix: None,
+        });
+    }
+
+    progress("Adaptive: candidates and held-out errors");
+    let t = Instant::now();
+    let options =
+        AdaptiveOptions { rays: config.rays, heldout: config.heldout, ..Default::default() };
+    let candidates = adaptive::Candidates::build(ctx, &options)?;
+    let candidates_time = t.elapsed();
+    for &threshold in &config.thresholds {
+        let t = Instant::now();
+        let g = candidates.select(threshold)?;
+        built.push(Built {
+            method: format!("Adaptive τ={threshold}"),
+            record_bytes: g.record_bytes(),
+            memory_bytes: g.memory_bytes(),
+            precompute: candidates_time + t.elapsed(),
+            mix: Some(g.mix()),
+            grid: Box::new(g),
+        });
+    }
+    Ok(built)
+}
+
+/// Renders one representation from every view at `size`², cold then warm, and scores it.
+/// Returns the row and the view-0 image.
+fn render_row(
+    inputs: &SceneInputs<'_>,
+    b: &Built,
+    res: u32,
+    size: u32,
+    references: &[Srgb8Image],
+) -> Result<(MethodRow, Srgb8Image), Error> {
+    let options =
+        filtered::Options { width: size, height: size, ambient: inputs.ambient, shadows: true };
+    let light = inputs.scene.light();
+    let (mut cold, mut warm) = (Duration::ZERO, Duration::ZERO);
+    let mut metrics = Vec::new();
+    let mut first = None;
+    for (camera, reference) in inputs.views.iter().zip(references) {
+        let t = Instant::now();
+        let mut cache = FrameCache::new(b.grid.as_ref())?;
+        let image =
+            filtered::render(&mut cache, camera, &light, inputs.scene.background, &options)?;
+        cold += t.elapsed();
+        let t = Instant::now();
+        let again =
+            filtered::render(&mut cache, camera, &light, inputs.scene.background, &options)?;
+        warm += t.elapsed();
+        drop(again);
+        let image = image.to_srgb8();
+        metrics.push(compare(&image, reference)?);
+        first.get_or_insert(image);
+    }
+    let n = inputs.views.len().max(1) as f64;
+    let voxels = b.grid.len();
+    let row = MethodRow {
+        method: b.method.clone(),
+        resolution: res,
+        image: size,
+        voxels,
+        record_bytes: b.record_bytes,
+        bytes_per_voxel: b.memory_bytes as f64 / voxels.max(1) as f64,
+        memory_bytes: b.memory_bytes,
+        precompute_ms: ms(b.precompute),
+        render_cold_ms: ms(cold) / n,
+        render_warm_ms: ms(warm) / n,
+        mse: Spread::of(&metrics.iter().map(|m| m.mse).collect::<Vec<_>>()),
+        ssim: Spread::of(&metrics.iter().map(|m| m.ssim).collect::<Vec<_>>()),
+        mix: b.mix,
+    };
+    Ok((row, first.expect("at least one view")))
+}
+
+impl FilteredResult {
+    /// Plots of SSIM against memory and against render time (warm cache), one series per
+    /// method over the resolutions, at the image side equal to the resolution.
+    pub fn plots(&self, label: &str) -> Vec<(String, Plot)> {
+        let mut methods: Vec<&str> = Vec::new();
+        for r in &self.rows {
+            if !methods.contains(&r.method.as_str()) {
+                methods.push(&r.method);
+            }
+        }
+        let series = |f: &dyn Fn(&MethodRow) -> (f64, f64)| -> Vec<Series> {
+            methods
+                .iter()
+                .map(|m| {
+                    let points = self
+                        .rows
+                        .iter()
+                        .filter(|r| r.method == *m && r.image == r.resolution)
+                        .map(f)
+                        .collect();
+                    Series::new(*m, points)
+                })
+                .collect()
+        };
+        vec![
+            (
+                format!("{label}-ssim-vs-memory"),
+                Plot {
+                    title: format!("{label}: SSIM against memory (image side = resolution)"),
+                    x_label: "memory (bytes)".into(),
+                    y_label: "SSIM (mean over views)".into(),
+                    log_x: true,
+                    series: series(&|r| (r.memory_bytes as f64, r.ssim.mean)),
+                    ..Default::default()
+                },
+            ),
+            (
+                format!("{label}-ssim-vs-render-time"),
+                Plot {
+                    title: format!("{label}: SSIM against render time (warm cache)"),
+                    x_label: "render time per frame (ms)".into(),
+                    y_label: "SSIM (mean over views)".into(),
+                    log_x: true,
+                    series: series(&|r| (r.render_warm_ms, r.ssim.mean)),
+                    ..Default::default()
+                },
+            ),
+        ]
+    }
+
+    /// One table per resolution: every method at every image size.
+    pub fn tables(&self, label: &str) -> Result<Vec<Table>, Error> {
+        let mut resolutions: Vec<u32> = self.rows.iter().map(|r| r.resolution).collect();
+        resolutions.dedup();
+        let mut tables = Vec::new();
+        for res in resolutions {
+            let mut table = Table::new(
+                format!("{label} filtered appearance {res}^3"),
+                vec![
+                    Column::text("method"),
+                    Column::number("image", NumberFormat::Integer),
+                    Column::number("voxels", NumberFormat::Integer),
+                    Column::number("record B/voxel", NumberFormat::Fixed(2)),
+                    Column::number("total B/voxel", NumberFormat::Fixed(2)),
+                    Column::number("memory (MiB)", NumberFormat::Fixed(3)),
+                    Column::number("precompute (ms)", NumberFormat::Fixed(0)),
+                    Column::number("render cold (ms)", NumberFormat::Fixed(1)),
+                    Column::number("render warm (ms)", NumberFormat::Fixed(1)),
+                    Column::text("MSE mean (min–max)"),
+                    Column::text("SSIM mean (min–max)"),
+                    Column::text("mix avg/vjk/vmesh"),
+                ],
+            );
+            for r in self.rows.iter().filter(|r| r.resolution == res) {
+                table.push_row(vec![
+                    r.method.clone().into(),
+                    Cell::Number(r.image as f64),
+                    Cell::Number(r.voxels as f64),
+                    Cell::Number(r.record_bytes),
+                    Cell::Number(r.bytes_per_voxel),
+                    Cell::Number(r.memory_bytes as f64 / (1 << 20) as f64),
+                    Cell::Number(r.precompute_ms),
+                    Cell::Number(r.render_cold_ms),
+                    Cell::Number(r.render_warm_ms),
+                    Cell::Text(format!("{:.2e}", r.mse.mean)),
+                    Cell::Text(r.ssim.display(4)),
+                    r.mix.map_or(Cell::Empty, |m| {
+                        Cell::Text(format!(
+                            "{:.0}/{:.0}/{:.0}%",
+                            m[0] * 100.0,
+                            m[1] * 100.0,
+                            m[2] * 100.0
+                        ))
+                    }),
+                ])?;
+            }
+            tables.push(table);
+        }
+        Ok(tables)
+    }
+}
