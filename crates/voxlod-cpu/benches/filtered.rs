@@ -2,12 +2,12 @@
 //! virtual-mesh grids (150 rays per voxel), rendered at 256×256 with 4 rays per pixel and
 //! shadows: cache cold (every cached value forgotten before the frame), warm (the same
 //! camera again) and new-view (view slots forgotten, shadows kept: a camera that moved under
-//! an unchanged light, the paper's "shadows precomputed"). Frames per second are 1 / time; the criterion figures use every core
-//! (rayon's pool).
+//! an unchanged light, the paper's "shadows precomputed"). Frames per second are 1 / time;
+//! the criterion figures use every core (rayon's pool).
 //!
 //! `cargo bench -p voxlod-cpu --bench filtered`; before the criterion runs it prints the
-//! precompute times, and single-core CPU times of cold and warm frames, which other processes
-//! on the machine do not distort.
+//! precompute times, the cache build times, and single-core CPU times of cold, warm and
+//! new-view frames, which other processes on the machine distort less than wall time.
 
 mod support;
 
@@ -121,26 +121,6 @@ fn renders(c: &mut Criterion) {
 
     let start = Instant::now();
     let averages = precompute(&ctx, &options, averages::fit).expect("averages");
-    if std::env::var("PROFILE_COLD").is_ok() {
-        let mut cache = FrameCache::with_layout(&averages, &averages.records).unwrap();
-        let n: usize = std::env::var("N").map_or(20, |v| v.parse().unwrap());
-        let warm = std::env::var("WARM").is_ok();
-        let mut o = view.options;
-        o.shadows = std::env::var("NOSHADOW").is_err();
-        let (_, t) = single_core(|| {
-            for _ in 0..n {
-                if !warm {
-                    cache.clear();
-                }
-                black_box(
-                    filtered::render(&mut cache, &view.camera, &view.light, scene.background, &o)
-                        .unwrap(),
-                );
-            }
-        });
-        eprintln!("{n} frames {:?} CPU", t);
-        std::process::exit(0);
-    }
     eprintln!("averages precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
     bench_representation(&mut group, "averages", &averages, &averages.records, &view);
     drop(averages);

@@ -44,13 +44,12 @@ use voxlod_format::records::{
     AdaptiveRef, AverageRecord, Kind, SggxRecord, SpecularRecord, VirtualMeshRecord,
 };
 use voxlod_format::{BrickMap, GridSpec, morton};
-use voxlod_scene::{LightSample, MaterialSample};
+use voxlod_scene::LightSample;
 
 use super::sampler::SamplingContext;
 use super::samples::VoxelSamples;
-use super::subgrid::DirectionalRule;
+use super::vmesh::VirtualMeshParams;
 use super::{Appearance, Opacity, RecordAppearance, averages, precompute, sggx, vmesh};
-use crate::shading::shade;
 use crate::{Error, Result};
 
 /// Default number of held-out rays per voxel.
@@ -467,104 +466,74 @@ impl Appearance for AdaptiveGrid {
     }
 }
 
-/// Parameters of virtual-mesh records: the directional-opacity rule and the barycentric
-/// shading samples per distribution face.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VirtualMeshParams {
-    /// How the opacity subgrid is read along a direction.
-    pub rule: DirectionalRule,
-    /// Barycentric samples per distribution face (0 reads as 1).
-    pub samples_per_face: u32,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::appearance::samples::{RaySample, SurfaceSample};
 
-impl Default for VirtualMeshParams {
-    fn default() -> Self {
-        Self { rule: DirectionalRule::default(), samples_per_face: vmesh::DEFAULT_SAMPLES_PER_FACE }
-    }
-}
-
-fn material(albedo: Vec3, specular: Option<&SpecularRecord>) -> MaterialSample {
-    MaterialSample {
-        albedo,
-        alpha: 1.0,
-        specular: Vec3::splat(specular.map_or(0.0, |s| s.level())),
-        shininess: specular.map_or(1.0, |s| s.exponent()),
-    }
-}
-
-impl RecordAppearance for AverageRecord {
-    type Params = ();
-
-    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
-        Opacity::Alpha(AverageRecord::opacity(self))
+    #[test]
+    fn the_cheapest_kind_under_the_threshold_wins_else_the_least_error() {
+        assert_eq!(Candidates::choose([0.05, 0.01, 0.0], 0.1), Kind::Average);
+        assert_eq!(Candidates::choose([0.2, 0.05, 0.0], 0.1), Kind::Sggx);
+        assert_eq!(Candidates::choose([0.2, 0.15, 0.1], 0.1), Kind::VirtualMesh);
+        assert_eq!(Candidates::choose([0.3, 0.2, 0.25], 0.1), Kind::Sggx);
+        // Ties without any kind under the threshold go to the cheaper kind.
+        assert_eq!(Candidates::choose([0.3, 0.3, 0.3], 0.1), Kind::Average);
     }
 
-    /// Shaded with the mean normal flipped toward the viewer (two-sided, as the ground truth
-    /// shades double-sided leaves); a voxel whose normal decoded to zero faces the viewer.
-    fn radiance(
-        &self,
-        _: (),
-        specular: Option<&SpecularRecord>,
-        to_viewer: Vec3,
-        light: &LightSample,
-        visibility: f32,
-        ambient: Vec3,
-    ) -> Vec3 {
-        let mut n = self.normal();
-        if n == Vec3::ZERO {
-            n = to_viewer;
-        } else if n.dot(to_viewer) < 0.0 {
-            n = -n;
+    /// Held-out lines in every bin not parallel to the plane z = ½, all hitting its white
+    /// two-sided surface (normal ±z toward the line).
+    fn opaque_plane(count: usize) -> VoxelSamples {
+        let bins: Vec<Vec3> = BINS.iter().copied().filter(|b| b.z != 0.0).collect();
+        let rays = (0..count)
+            .map(|i| {
+                let dir = bins[i % bins.len()];
+                let normal = if dir.z < 0.0 { Vec3::Z } else { -Vec3::Z };
+                RaySample {
+                    dir,
+                    entry: Vec3::splat(0.5),
+                    chord: 1.0,
+                    occluded: true,
+                    surface: Some(SurfaceSample {
+                        point: Vec3::splat(0.5),
+                        normal,
+                        albedo: Vec3::ONE,
+                        specular: 0.0,
+                        shininess: 1.0,
+                    }),
+                }
+            })
+            .collect();
+        VoxelSamples { rays }
+    }
+
+    #[test]
+    fn a_matching_record_scores_lower_than_a_wrong_one() {
+        let held = opaque_plane(10 * 8);
+        let good = AverageRecord::new(Vec3::ONE, Vec3::Z, 1.0);
+        let transparent = AverageRecord::new(Vec3::ONE, Vec3::Z, 0.0);
+        let dark = AverageRecord::new(Vec3::splat(0.2), Vec3::Z, 1.0);
+        let e_good = directional_error(&good, (), None, &held);
+        let e_transparent = directional_error(&transparent, (), None, &held);
+        let e_dark = directional_error(&dark, (), None, &held);
+        // The opacity term vanishes for the opaque record; the Averages normal is flipped
+        // toward each viewer like the samples', so shading matches up to quantization.
+        assert!(e_good < 0.02, "{e_good}");
+        assert!((e_transparent - e_good - 1.0).abs() < 0.02, "{e_transparent} vs {e_good}");
+        assert!(e_dark > e_good + 0.1, "{e_dark} vs {e_good}");
+        for e in [e_good, e_transparent, e_dark] {
+            assert!(e.is_finite() && e >= 0.0);
         }
-        shade(&material(self.color(), specular), n, to_viewer, light, visibility, ambient)
-    }
-}
-
-impl RecordAppearance for SggxRecord {
-    type Params = ();
-
-    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
-        Opacity::NonExponential { sigma: self.sigma_t(), gamma: self.gamma() }
     }
 
-    fn radiance(
-        &self,
-        _: (),
-        specular: Option<&SpecularRecord>,
-        to_viewer: Vec3,
-        light: &LightSample,
-        visibility: f32,
-        ambient: Vec3,
-    ) -> Vec3 {
-        let m = material(self.color(), specular);
-        sggx::shade_record(self.matrix(), &m, to_viewer, light, visibility, ambient)
-    }
-}
-
-impl RecordAppearance for VirtualMeshRecord {
-    type Params = VirtualMeshParams;
-
-    fn opacity(&self, p: VirtualMeshParams, dir: Vec3) -> Opacity {
-        Opacity::Alpha(super::subgrid::directional_opacity(&self.opacity, dir, p.rule))
-    }
-
-    fn radiance(
-        &self,
-        p: VirtualMeshParams,
-        specular: Option<&SpecularRecord>,
-        to_viewer: Vec3,
-        light: &LightSample,
-        visibility: f32,
-        ambient: Vec3,
-    ) -> Vec3 {
-        vmesh::shade_record(
-            self,
-            specular,
-            to_viewer,
-            light,
-            visibility,
-            ambient,
-            p.samples_per_face,
-        )
+    #[test]
+    fn every_held_out_line_falls_in_its_nearest_bin() {
+        for (i, b) in BINS.iter().enumerate() {
+            assert_eq!(nearest_bin(*b), i);
+            assert_eq!(nearest_bin(*b * 3.0 + Vec3::splat(1e-3)), i);
+        }
+        for l in LIGHTS {
+            assert!((l.length() - 1.0).abs() < 1e-6);
+        }
     }
 }

@@ -19,15 +19,16 @@
 //! - **Opacity along a direction** is the record's opacity, whatever the direction and chord
 //!   ([`Opacity::Alpha`]).
 
-use glam::{DVec3, UVec3, Vec3};
-use voxlod_format::GridSpec;
+use glam::{DVec3, Vec3};
 use voxlod_format::records::AverageRecord;
-use voxlod_scene::{LightSample, MaterialSample};
+use voxlod_scene::LightSample;
 
+use super::Opacity;
 use super::eigen::symmetric_eigen;
 use super::samples::VoxelSamples;
-use super::{Appearance, AppearanceGrid, Opacity};
+use super::{RecordAppearance, record_material};
 use crate::shading::shade;
+use voxlod_format::records::SpecularRecord;
 
 /// The Averages record of a voxel's samples (module docs), or `None` without a case-(a) hit.
 pub fn fit(samples: &VoxelSamples) -> Option<AverageRecord> {
@@ -55,55 +56,43 @@ pub fn fit(samples: &VoxelSamples) -> Option<AverageRecord> {
     Some(AverageRecord::new((albedo / count as f64).as_vec3(), n.as_vec3(), samples.opacity()))
 }
 
-impl Appearance for AppearanceGrid<AverageRecord> {
-    fn grid(&self) -> &GridSpec {
-        &self.grid
+impl RecordAppearance for AverageRecord {
+    type Params = ();
+
+    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
+        Opacity::Alpha(AverageRecord::opacity(self))
     }
 
-    fn len(&self) -> usize {
-        self.records.len()
-    }
-
-    fn index_of(&self, c: UVec3) -> Option<usize> {
-        self.records.index_of(c)
-    }
-
-    fn opacity(&self, index: usize, _dir: Vec3) -> Opacity {
-        Opacity::Alpha(self.records.values()[index].opacity())
-    }
-
+    /// Shaded with the mean normal flipped toward the viewer (two-sided, as the ground truth
+    /// shades double-sided leaves); a voxel whose normal decoded to zero faces the viewer.
     fn radiance(
         &self,
-        index: usize,
+        _: (),
+        specular: Option<&SpecularRecord>,
         to_viewer: Vec3,
         light: &LightSample,
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        let r = &self.records.values()[index];
-        let mut n = r.normal();
+        let mut n = self.normal();
         if n == Vec3::ZERO {
             n = to_viewer;
         } else if n.dot(to_viewer) < 0.0 {
             n = -n;
         }
-        let (specular, shininess) = match &self.specular {
-            Some(s) => (Vec3::splat(s[index].level()), s[index].exponent()),
-            None => (Vec3::ZERO, 0.0),
-        };
-        let m = MaterialSample { albedo: r.color(), alpha: 1.0, specular, shininess };
-        shade(&m, n, to_viewer, light, visibility, ambient)
+        shade(&record_material(self.color(), specular), n, to_viewer, light, visibility, ambient)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use glam::UVec3;
-    use voxlod_format::records::SpecularRecord;
     use voxlod_format::{BrickMap, GridSpec};
+    use voxlod_scene::MaterialSample;
 
     use super::*;
     use crate::appearance::samples::{RaySample, SurfaceSample};
+    use crate::appearance::{Appearance, AppearanceGrid};
 
     fn line(occluded: bool, normal: Option<Vec3>, albedo: Vec3) -> RaySample {
         RaySample {

@@ -140,3 +140,48 @@ pub trait RecordAppearance: Copy + Send + Sync {
         ambient: Vec3,
     ) -> Vec3;
 }
+
+/// The material a record shades with: its albedo, and the specular side record if any.
+pub fn record_material(
+    albedo: Vec3,
+    specular: Option<&SpecularRecord>,
+) -> voxlod_scene::MaterialSample {
+    voxlod_scene::MaterialSample {
+        albedo,
+        alpha: 1.0,
+        specular: Vec3::splat(specular.map_or(0.0, |s| s.level())),
+        shininess: specular.map_or(1.0, |s| s.exponent()),
+    }
+}
+
+/// Every grid of records without parameters (Averages, \[VJK21\]) answers through its
+/// records' [`RecordAppearance`].
+impl<R: RecordAppearance<Params = ()>> Appearance for AppearanceGrid<R> {
+    fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+
+    fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    fn index_of(&self, c: glam::UVec3) -> Option<usize> {
+        self.records.index_of(c)
+    }
+
+    fn opacity(&self, index: usize, dir: Vec3) -> Opacity {
+        self.records.values()[index].opacity((), dir)
+    }
+
+    fn radiance(
+        &self,
+        index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let specular = self.specular.as_ref().map(|s| &s[index]);
+        self.records.values()[index].radiance((), specular, to_viewer, light, visibility, ambient)
+    }
+}

@@ -20,15 +20,16 @@
 
 use std::f32::consts::{PI, TAU};
 
-use glam::{DVec3, Mat3, UVec3, Vec2, Vec3};
-use voxlod_format::GridSpec;
+use glam::{DVec3, Mat3, Vec2, Vec3};
 use voxlod_format::records::SggxRecord;
 use voxlod_scene::{LightSample, MaterialSample};
 
 use super::eigen::symmetric_eigen;
 use super::samples::VoxelSamples;
-use super::{Appearance, AppearanceGrid, Opacity, vjk};
+use super::{Opacity, vjk};
+use super::{RecordAppearance, record_material};
 use crate::shading::shade;
+use voxlod_format::records::SpecularRecord;
 
 /// Floor of the projected areas `σ_k` before normalization: Heitz's roughness 0.1 for a flat
 /// surface, and what keeps a rank-deficient fit (all normals equal) positive definite.
@@ -234,48 +235,35 @@ pub fn shade_record(
     sum / SHADING_SAMPLES as f32
 }
 
-impl Appearance for AppearanceGrid<SggxRecord> {
-    fn grid(&self) -> &GridSpec {
-        &self.grid
-    }
+impl RecordAppearance for SggxRecord {
+    type Params = ();
 
-    fn len(&self) -> usize {
-        self.records.len()
-    }
-
-    fn index_of(&self, c: UVec3) -> Option<usize> {
-        self.records.index_of(c)
-    }
-
-    fn opacity(&self, index: usize, _dir: Vec3) -> Opacity {
-        let r = &self.records.values()[index];
-        Opacity::NonExponential { sigma: r.sigma_t(), gamma: r.gamma() }
+    fn opacity(&self, _: (), _dir: Vec3) -> Opacity {
+        Opacity::NonExponential { sigma: self.sigma_t(), gamma: self.gamma() }
     }
 
     fn radiance(
         &self,
-        index: usize,
+        _: (),
+        specular: Option<&SpecularRecord>,
         to_viewer: Vec3,
         light: &LightSample,
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        let r = &self.records.values()[index];
-        let spec = self.specular.as_ref().and_then(|s| s.get(index));
-        let material = MaterialSample {
-            albedo: r.color(),
-            alpha: 1.0,
-            specular: Vec3::splat(spec.map_or(0.0, |s| s.level())),
-            shininess: spec.map_or(1.0, |s| s.exponent()),
-        };
-        shade_record(r.matrix(), &material, to_viewer, light, visibility, ambient)
+        let m = record_material(self.color(), specular);
+        shade_record(self.matrix(), &m, to_viewer, light, visibility, ambient)
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use glam::UVec3;
+    use voxlod_format::GridSpec;
+
     use super::*;
     use crate::appearance::vjk::test_lines::plane;
+    use crate::appearance::{Appearance, AppearanceGrid};
     use crate::random::rand_f32;
     use proptest::prelude::*;
 

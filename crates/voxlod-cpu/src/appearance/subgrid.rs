@@ -8,7 +8,7 @@
 //! # Build rules
 //! - **Whole chord, unweighted.** Every sampling line books one ray, and one occlusion if it is
 //!   occluded, on every sub-cell its chord through the voxel crosses with positive length
-//!   ([`for_each_subcell`], a 3×3×3 DDA). Zero-length touches (a line through a sub-cell edge
+//!   ([`crossed_subcells`]). Zero-length touches (a line through a sub-cell edge
 //!   or corner, or segments shorter than [`TOUCH`]) are not booked; the reference code counts
 //!   them.
 //! - **Front-hit mark.** A case-(a) hit marks exactly one sub-cell, `clamp(⌊3p⌋, 0, 2)` per
@@ -26,14 +26,13 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 use voxlod_format::records::quant::unorm8;
 
 use super::sampler::{choose_face, chord, entry_point};
 use super::samples::VoxelSamples;
 
-/// Segments of a line inside a sub-cell shorter than this (voxel units) count as touches and
-/// are not visited; boundaries crossed within this distance of each other are crossed at once.
+/// A line whose overlap with a sub-cell is no longer than this (voxel units) only touches it.
 pub const TOUCH: f32 = 1e-6;
 
 /// Number of lines of [`DirectionalRule::Lines`].
@@ -51,48 +50,66 @@ pub fn subcell_of(p: Vec3) -> usize {
     c(p.x) + 3 * c(p.y) + 9 * c(p.z)
 }
 
-/// Visits, in order along the line `entry + t·d` for `t ∈ [0, chord]`, the index of every
-/// sub-cell the segment crosses with positive length (at most 7), until `visit` returns
-/// `false`. `entry` is voxel-local on the voxel's boundary and `chord` the line's length inside
-/// it (see [`chord`]).
+/// The sub-cells the segment `entry + t·d`, `t ∈ [0, chord]`, crosses with positive length,
+/// as a mask (bit `x + 3y + 9z`; at most 7 bits set). `entry` is voxel-local on the voxel's
+/// boundary and `chord` the line's length inside it (see [`chord`]).
 ///
-/// The start cell on each axis is `⌊3·entry⌋`, or `⌈3·entry⌉ − 1` when `d` points down that
-/// axis, so a line starting on a sub-cell boundary starts in the cell it goes into; a line
-/// running exactly inside a sub-cell face (`d_k = 0` on a boundary) is booked in the cell
-/// above it. Boundaries crossed within [`TOUCH`] of each other are crossed together, so a line
-/// through a sub-cell edge or corner skips the cells it only touches.
+/// A cell is crossed when the segment's overlap with its closed box is longer than [`TOUCH`]:
+/// a line through a sub-cell edge or corner skips the cells it only touches, and a line
+/// starting on a sub-cell boundary is only in the cell it goes into. A line running exactly
+/// inside a sub-cell face (`d_k = 0` on a boundary) is booked in the cell above it
+/// (`⌊3·entry_k⌋`). Branch-free (per axis the three slab intervals, then 27 overlaps), since
+/// which cells a random line crosses is unpredictable.
+#[inline]
+pub fn crossed_subcells(entry: Vec3, d: Vec3, chord: f32) -> u32 {
+    if chord.is_nan() || chord <= TOUCH {
+        return 0;
+    }
+    // Plain compare-and-select min/max (one instruction each): no operand below is NaN.
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    let (e, d) = (entry.to_array(), d.to_array());
+    let (mut lo, mut hi) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
+    for j in 0..3 {
+        let inv = 1.0 / d[j];
+        let t = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0].map(|b: f32| (b - e[j]) * inv);
+        let home = ((3.0 * e[j]).floor() as i32).clamp(0, 2) as usize;
+        for s in 0..3 {
+            let (a, b) = (t[s], t[s + 1]);
+            // A line that does not move along axis j stays in its home slab for all t.
+            let (l, h) = if s == home {
+                (f32::NEG_INFINITY, f32::INFINITY)
+            } else {
+                (f32::INFINITY, f32::NEG_INFINITY)
+            };
+            let flat = d[j] == 0.0;
+            lo[j][s] = if flat { l } else { min(a, b) };
+            hi[j][s] = if flat { h } else { max(a, b) };
+        }
+    }
+    // The three x slabs side by side in SIMD lanes: one compare and one bit mask per (y, z).
+    let (lo_x, hi_x) = (Vec3A::from_array(lo[0]), Vec3A::from_array(hi[0]));
+    let mut mask = 0;
+    for z in 0..3 {
+        for y in 0..3 {
+            let l = max(max(lo[1][y], lo[2][z]), 0.0);
+            let h = min(min(hi[1][y], hi[2][z]), chord);
+            let length = hi_x.min(Vec3A::splat(h)) - lo_x.max(Vec3A::splat(l));
+            mask |= length.cmpgt(Vec3A::splat(TOUCH)).bitmask() << (3 * y + 9 * z);
+        }
+    }
+    mask
+}
+
+/// Visits the sub-cells of [`crossed_subcells`] in index order until `visit` returns `false`.
 #[inline]
 pub fn for_each_subcell(entry: Vec3, d: Vec3, chord: f32, mut visit: impl FnMut(usize) -> bool) {
-    if chord.is_nan() || chord <= TOUCH {
-        return;
-    }
-    let mut cell = [0i32; 3];
-    for (j, c) in cell.iter_mut().enumerate() {
-        let p = 3.0 * entry[j];
-        let start = if d[j] < 0.0 { p.ceil() - 1.0 } else { p.floor() };
-        *c = (start as i32).clamp(0, 2);
-    }
-    loop {
-        if !visit((cell[0] + 3 * cell[1] + 9 * cell[2]) as usize) {
+    let mut mask = crossed_subcells(entry, d, chord);
+    while mask != 0 {
+        if !visit(mask.trailing_zeros() as usize) {
             return;
         }
-        let mut next = [f32::INFINITY; 3];
-        for j in 0..3 {
-            if d[j] > 0.0 && cell[j] < 2 {
-                next[j] = ((cell[j] + 1) as f32 / 3.0 - entry[j]) / d[j];
-            } else if d[j] < 0.0 && cell[j] > 0 {
-                next[j] = (cell[j] as f32 / 3.0 - entry[j]) / d[j];
-            }
-        }
-        let t = next[0].min(next[1]).min(next[2]);
-        if t.is_nan() || t >= chord - TOUCH {
-            return;
-        }
-        for j in 0..3 {
-            if next[j] <= t + TOUCH {
-                cell[j] += if d[j] > 0.0 { 1 } else { -1 };
-            }
-        }
+        mask &= mask - 1;
     }
 }
 
@@ -103,12 +120,12 @@ pub fn build(samples: &VoxelSamples) -> [u8; 27] {
     let mut occluded = [0u32; 27];
     let mut marked = [false; 27];
     for r in &samples.rays {
-        let o = r.occluded as u32;
-        for_each_subcell(r.entry, r.dir, r.chord, |c| {
-            rays[c] += 1;
-            occluded[c] += o;
-            true
-        });
+        let (m, o) = (crossed_subcells(r.entry, r.dir, r.chord), r.occluded as u32);
+        for c in 0..27 {
+            let bit = m >> c & 1;
+            rays[c] += bit;
+            occluded[c] += bit & o;
+        }
         if let Some(s) = &r.surface {
             marked[subcell_of(s.point)] = true;
         }
@@ -126,7 +143,8 @@ pub enum DirectionalRule {
     /// `u = (k + ½)/K` for the face choice, the choice's remainder as its first in-face
     /// coordinate and `φ₂(k) + 1/(2K)` (the base-2 radical inverse, moved to the centre of
     /// its stratum so that no line runs along a voxel edge) as the second. A line's opacity
-    /// is the largest α of the sub-cells it crosses with positive length; the voxel's is the
+    /// is the largest α of the sub-cells it crosses with positive length ([`crossed_subcells`]);
+    /// the voxel's is the
     /// mean over the lines with a positive chord. The limit of the paper's rule with
     /// point-sized pixels and exact footprints; no randomness, identical on CPU and GPU.
     #[default]

@@ -47,6 +47,7 @@ use voxlod_format::records::quant::{encode_dir, encode_srgb8};
 use voxlod_format::records::{SCALE_RANGE, SpecularRecord, VirtualMeshRecord};
 use voxlod_scene::{LightSample, MaterialSample};
 
+use super::RecordAppearance;
 use super::samples::VoxelSamples;
 use super::sggx::{self, radical_inverse2};
 use super::subgrid::{self, DirectionalRule};
@@ -302,6 +303,49 @@ impl VirtualMeshGrid {
     }
 }
 
+/// Parameters of virtual-mesh records: the directional-opacity rule and the barycentric
+/// shading samples per distribution face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VirtualMeshParams {
+    /// How the opacity subgrid is read along a direction.
+    pub rule: DirectionalRule,
+    /// Barycentric samples per distribution face (0 reads as 1).
+    pub samples_per_face: u32,
+}
+
+impl Default for VirtualMeshParams {
+    fn default() -> Self {
+        Self { rule: DirectionalRule::default(), samples_per_face: DEFAULT_SAMPLES_PER_FACE }
+    }
+}
+
+impl RecordAppearance for VirtualMeshRecord {
+    type Params = VirtualMeshParams;
+
+    fn opacity(&self, p: VirtualMeshParams, dir: Vec3) -> Opacity {
+        Opacity::Alpha(subgrid::directional_opacity(&self.opacity, dir, p.rule))
+    }
+
+    fn radiance(
+        &self,
+        p: VirtualMeshParams,
+        specular: Option<&SpecularRecord>,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        shade_record(self, specular, to_viewer, light, visibility, ambient, p.samples_per_face)
+    }
+}
+
+impl VirtualMeshGrid {
+    /// The parameters its records are read with.
+    pub fn params(&self) -> VirtualMeshParams {
+        VirtualMeshParams { rule: self.rule, samples_per_face: self.samples_per_face }
+    }
+}
+
 impl Appearance for VirtualMeshGrid {
     fn grid(&self) -> &GridSpec {
         &self.grid.grid
@@ -316,8 +360,7 @@ impl Appearance for VirtualMeshGrid {
     }
 
     fn opacity(&self, index: usize, dir: Vec3) -> Opacity {
-        let rec = &self.grid.records.values()[index];
-        Opacity::Alpha(subgrid::directional_opacity(&rec.opacity, dir, self.rule))
+        self.grid.records.values()[index].opacity(self.params(), dir)
     }
 
     fn radiance(
@@ -328,9 +371,9 @@ impl Appearance for VirtualMeshGrid {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        let rec = &self.grid.records.values()[index];
         let spec = self.grid.specular.as_ref().and_then(|s| s.get(index));
-        shade_record(rec, spec, to_viewer, light, visibility, ambient, self.samples_per_face)
+        let p = self.params();
+        self.grid.records.values()[index].radiance(p, spec, to_viewer, light, visibility, ambient)
     }
 }
 

@@ -55,6 +55,8 @@ pub(super) struct HitBatch {
     pub k: Vec<u32>,
     pub u: Vec<f32>,
     pub v: Vec<f32>,
+    /// Scratch: the lines whose geometric test passed, for an alpha-filtered triangle.
+    candidates: Vec<u32>,
 }
 
 impl HitBatch {
@@ -73,6 +75,7 @@ impl HitBatch {
             v.clear();
             v.resize(n, 0.0);
         }
+        self.candidates.resize(n, 0);
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).
@@ -102,13 +105,24 @@ impl HitBatch {
         let (dx, dy, dz, ex, ey, ez) = (&dx[..n], &dy[..n], &dz[..n], &ex[..n], &ey[..n], &ez[..n]);
         let (bt, bk) = (&mut self.t[..n], &mut self.k[..n]);
         let (bu, bv) = (&mut self.u[..n], &mut self.v[..n]);
+        let candidates = &mut self.candidates[..n];
         for (k, tri) in tris.iter().enumerate() {
             let (tri, k) = (*tri, k as u32);
             if tri.alpha {
+                // The geometric test branch-free into a compacted list of candidate lines, then
+                // the (costly, branchy) alpha filter on the candidates alone.
+                let mut m = 0;
                 for j in 0..n {
                     let (e, d) = (Vec3::new(ex[j], ey[j], ez[j]), Vec3::new(dx[j], dy[j], dz[j]));
-                    let (t, u, v, hit) = tri.intersect(e, d, bt[j]);
-                    if hit && accepts(&tri, j, u, v) {
+                    let (_, _, _, hit) = tri.intersect(e, d, bt[j]);
+                    candidates[m] = j as u32;
+                    m += hit as usize;
+                }
+                for &j in &candidates[..m] {
+                    let j = j as usize;
+                    let (e, d) = (Vec3::new(ex[j], ey[j], ez[j]), Vec3::new(dx[j], dy[j], dz[j]));
+                    let (t, u, v, _) = tri.intersect(e, d, bt[j]);
+                    if accepts(&tri, j, u, v) {
                         (bt[j], bk[j], bu[j], bv[j]) = (t, k, u, v);
                     }
                 }
@@ -169,7 +183,7 @@ mod tests {
                 })
                 .collect();
             let accepts = |tri: &LocalTriangle, j: usize, _u: f32, _v: f32| {
-                (tri.triangle + j as u32) % 3 != 0
+                !(tri.triangle + j as u32).is_multiple_of(3)
             };
             let (mut fast, mut portable) = (HitBatch::default(), HitBatch::default());
             fast.closest(&tris, &lines, accepts);

@@ -180,3 +180,61 @@ impl LightBounds {
         (top as f64 - p.dot(self.l) + self.margin) as f32
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{DVec3, UVec3};
+
+    use super::*;
+
+    /// A floor at y = 1 over a 32 × 16 × 32 grid, and a plate at y = 10 over x, z < 8.
+    fn floor_and_plate() -> (GridSpec, BrickMap<()>) {
+        let grid = GridSpec::new(DVec3::new(5.0, -3.0, 2.0), 0.5, UVec3::new(32, 16, 32)).unwrap();
+        let mut v = Vec::new();
+        for x in 0..32 {
+            for z in 0..32 {
+                v.push((UVec3::new(x, 1, z), ()));
+                if x < 8 && z < 8 {
+                    v.push((UVec3::new(x, 10, z), ()));
+                }
+            }
+        }
+        (grid, BrickMap::from_voxels(grid.dims, v).unwrap())
+    }
+
+    #[test]
+    fn shadow_rays_end_just_past_the_highest_voxel_above_them() {
+        let (grid, map) = floor_and_plate();
+        let up = LightBounds::new(Vec3::Y, &map, &grid);
+        // In voxels: the floor's own top is 0.5 above its centre, plus the 0.5 margin.
+        let open = up.t_max(&grid, UVec3::new(20, 1, 20)) / 0.5;
+        assert!((open - 1.0).abs() < 1e-3, "{open}");
+        let covered = up.t_max(&grid, UVec3::new(3, 1, 4)) / 0.5;
+        assert!((covered - 10.0).abs() < 1e-3, "{covered}");
+        // Slanted light: the ray from (12, 1, 6) meets the plate 9 voxels up, at t = 9/l_y
+        // voxels; the one from (20, 1, 20) meets nothing but its neighbours in the floor.
+        let l = Vec3::new(-1.0, 1.0, -0.3).normalize();
+        let slanted = LightBounds::new(l, &map, &grid);
+        let t = slanted.t_max(&grid, UVec3::new(12, 1, 6)) / 0.5;
+        // Conservative by up to a cell, a projected voxel and the margin.
+        assert!(t > 9.0 / l.y && t < 9.0 / l.y + 4.0, "{t}");
+        let t = slanted.t_max(&grid, UVec3::new(20, 1, 20)) / 0.5;
+        assert!(t < 3.0, "{t}");
+    }
+
+    #[test]
+    fn screen_tiles_cover_the_projected_bricks_only() {
+        let (grid, map) = floor_and_plate();
+        let centre = Vec3::new(13.0, -2.0, 10.0);
+        let cam = voxlod_scene::Camera::look_at(Vec3::new(13.0, 30.0, 10.0), centre, Vec3::Z, 30.0);
+        let frame = cam.frame(64, 64);
+        let tiles = ScreenTiles::new(&frame, &map, &grid);
+        // Straight down onto the floor: the central tiles are covered, to a finite depth
+        // beyond the floor's distance; a camera looking away covers nothing.
+        let t = tiles.t_max(32, 32).expect("covered");
+        assert!(t > 30.0 && t < 40.0, "{t}");
+        let away = voxlod_scene::Camera::look_at(cam.eye, cam.eye + Vec3::Y, Vec3::Z, 30.0);
+        let none = ScreenTiles::new(&away.frame(64, 64), &map, &grid);
+        assert!((0..64).all(|y| (0..64).all(|x| none.t_max(x, y).is_none())));
+    }
+}
