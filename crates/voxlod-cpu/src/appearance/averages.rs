@@ -1,6 +1,6 @@
 //! Averages (HPG 2023 §5; design note §2): one mean colour, one mean normal and one opacity per
 //! voxel, the paper's 7 bytes ([`AverageRecord`]), fitted by [`fit`] and rendered through the
-//! [`Appearance`] implementation of `AppearanceGrid<AverageRecord>`.
+//! [`RecordAppearance`] implementation of [`AverageRecord`].
 //!
 //! # Rules (each has a unit test below)
 //! - **Opacity** = occluded lines / all lines: every line whose closest hit exists counts,
