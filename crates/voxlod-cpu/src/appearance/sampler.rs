@@ -373,44 +373,11 @@ impl<'a> SamplingContext<'a> {
     }
 }
 
-/// Checks that `geometry` can be sampled and shaded with `scene`'s materials: one normal and
-/// UV per vertex, one material per triangle, vertex and material indices in range, finite
-/// vertices. (The same checks as the ground truth's, which `render` keeps private.)
+/// Checks that `geometry` can be sampled and shaded with `scene`'s materials: the ground
+/// truth's checks (one normal and UV per vertex, one material per triangle, indices in range),
+/// plus finite vertices.
 fn check_geometry(scene: &Scene, geometry: &Geometry) -> Result<()> {
-    let n = geometry.positions.len();
-    if geometry.normals.len() != n
-        || geometry.uvs.len() != n
-        || geometry.materials.len() != geometry.indices.len()
-    {
-        return Err(Error::InvalidParameter {
-            name: "geometry",
-            value: format!(
-                "{n} positions, {} normals, {} uvs, {} triangles, {} materials",
-                geometry.normals.len(),
-                geometry.uvs.len(),
-                geometry.indices.len(),
-                geometry.materials.len()
-            ),
-            reason: "normals and uvs need one entry per position, materials one per triangle"
-                .into(),
-        });
-    }
-    if let Some(&i) = geometry.indices.iter().flatten().find(|&&i| i as usize >= n) {
-        return Err(Error::InvalidParameter {
-            name: "geometry",
-            value: format!("vertex index {i}"),
-            reason: format!("the geometry has {n} vertices"),
-        });
-    }
-    if let Some(&m) = geometry.materials.iter().find(|&&m| m as usize >= scene.materials.len()) {
-        return Err(voxlod_scene::Error::DanglingReference {
-            what: "material",
-            index: m as usize,
-            count: scene.materials.len(),
-            by: "a triangle of the geometry".into(),
-        }
-        .into());
-    }
+    crate::render::surface::check_geometry(scene, geometry)?;
     if let Some(i) = geometry.positions.iter().position(|p| !p.is_finite()) {
         return Err(Error::InvalidParameter {
             name: "geometry",

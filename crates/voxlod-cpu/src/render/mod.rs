@@ -18,7 +18,7 @@ pub mod dda;
 pub mod filtered;
 pub mod ground_truth;
 pub mod sampling;
-mod surface;
+pub(crate) mod surface;
 
 #[cfg(test)]
 pub(crate) mod test_scenes;
