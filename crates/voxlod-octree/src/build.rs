@@ -1,0 +1,320 @@
+//! The CPU reference build, bottom-up from Morton-sorted voxels (rayon inside each step):
+//! 1. **Input check**: coordinates inside the grid, strictly increasing Morton codes (no
+//!    duplicate), every payload accepted by [`Payload::check`].
+//! 2. **Occupied levels, bottom-up**: the occupied nodes of level `l+1` are the distinct codes
+//!    `c >> 3` of level `l`; each one's payload is [`Payload::prefilter`] of its (up to) eight
+//!    occupied children, the others counting as empty. Sorted input stays sorted at every level.
+//! 3. **Tiles per sparse level**: the parents of the backward closure of the occupied nodes
+//!    (`octree` module docs), sorted and deduplicated; each parent gets one 2×2×2 tile.
+//! 4. **Arrays**: dense levels scatter their occupied payloads into `r³` arrays; sparse levels
+//!    scatter theirs into the tiles and point each parent at its tile (tile `t` starts at node
+//!    `8t`), with masks from the occupied children.
+//! 5. **Neighbour links, top-down**: the +a neighbour of child `k` is in the same tile when `k`'s
+//!    a-bit is 0 (`k | bit`); otherwise it is child `k & !bit` of the parent's +a neighbour's
+//!    tile (found through the parent level's links, or by index on the dense level). O(1) per
+//!    node, no search, and it finds every existing neighbour because a tile exists exactly when
+//!    its parent is a node of the closure.
+//!
+//! Debug builds then run [`Octree::validate`] and return its error.
+
+use glam::UVec3;
+use rayon::prelude::*;
+use voxlod_format::{BrickMap, GridSpec, morton};
+
+use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
+use crate::payload::Payload;
+use crate::{Error, Result};
+
+/// Occupied nodes of one level: sorted Morton codes and their payloads.
+struct Occupied<P> {
+    codes: Vec<u64>,
+    payload: Vec<P>,
+}
+
+impl<P: Payload> Octree<P> {
+    /// Builds an octree over `grid` from `(voxel, payload)` pairs in any order (sorted here).
+    /// A voxel outside `grid.dims`, given twice, or with a payload [`Payload::check`] rejects is
+    /// an error naming it.
+    ///
+    /// ```
+    /// use glam::{DVec3, UVec3, Vec3};
+    /// use voxlod_format::GridSpec;
+    /// use voxlod_octree::{AveragePayload, BuildOptions, Octree};
+    /// let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(8)).unwrap();
+    /// let red = AveragePayload::new(Vec3::X, Vec3::Y, 1.0);
+    /// let tree = Octree::build(grid, [(UVec3::new(7, 7, 7), red)], &BuildOptions::default())
+    ///     .unwrap();
+    /// assert_eq!(tree.depth(), 3);
+    /// let bad = AveragePayload::new(Vec3::X, Vec3::Y, f32::NAN);
+    /// let err = Octree::build(grid, [(UVec3::new(1, 2, 3), bad)], &BuildOptions::default());
+    /// assert!(err.unwrap_err().to_string().contains("[1, 2, 3]"));
+    /// ```
+    pub fn build(
+        grid: GridSpec,
+        voxels: impl IntoIterator<Item = (UVec3, P)>,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        let dims = grid.dims;
+        let mut keyed = Vec::new();
+        for (c, p) in voxels {
+            if !c.cmplt(dims).all() {
+                return Err(Error::OutOfBounds { coord: c, dims });
+            }
+            keyed.push((morton::encode(c), p));
+        }
+        keyed.par_sort_unstable_by_key(|k| k.0);
+        Self::from_morton_sorted(grid, keyed, options)
+    }
+
+    /// Builds an octree from the records of a brick map (iterated in Morton order, so nothing
+    /// is sorted), converting each record with `to_payload` (e.g.
+    /// [`crate::AveragePayload::from_record`]). The map must fit in `grid`.
+    pub fn from_brick_map<R>(
+        grid: GridSpec,
+        map: &BrickMap<R>,
+        to_payload: impl Fn(&R) -> P,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        let voxels = map.iter().map(|(c, r)| (morton::encode(c), to_payload(r))).collect();
+        Self::from_morton_sorted(grid, voxels, options)
+    }
+
+    /// Builds an octree from `(Morton code, payload)` pairs in strictly increasing code order.
+    /// Out-of-order or repeated codes, voxels outside the grid and rejected payloads are errors.
+    pub fn from_morton_sorted(
+        grid: GridSpec,
+        voxels: Vec<(u64, P)>,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        grid.validate()?;
+        let (depth, first_dense) = plan(grid.dims, options)?;
+        check_input(grid.dims, &voxels)?;
+        let voxel_count = voxels.len() as u64;
+        let (codes, payload) = voxels.into_iter().unzip();
+        let mut occupied = vec![Occupied { codes, payload }];
+        for l in 1..=depth as usize {
+            let next = coarsen(&occupied[l - 1]);
+            occupied.push(next);
+        }
+        // Tiles of each sparse level: parents of the backward closure.
+        let tiles: Vec<Vec<u64>> =
+            occupied[..first_dense as usize].par_iter().map(|o| tile_parents(&o.codes)).collect();
+        for (l, t) in tiles.iter().enumerate() {
+            let nodes = 8 * t.len() as u64;
+            if nodes >= NONE as u64 {
+                return Err(Error::TooManyNodes { level: l as u32, nodes });
+            }
+        }
+        let mut levels: Vec<Level<P>> = (0..=depth)
+            .into_par_iter()
+            .map(|l| {
+                let res_log2 = depth - l;
+                // The level below and its tiles' parents, where this level has child pointers.
+                let below = l.checked_sub(1).and_then(|b| {
+                    tiles.get(b as usize).map(|t| (&occupied[b as usize], t.as_slice()))
+                });
+                if l >= first_dense {
+                    dense_level(res_log2, &occupied[l as usize], below)
+                } else {
+                    sparse_level(res_log2, &occupied[l as usize], &tiles[l as usize], below)
+                }
+            })
+            .collect();
+        for l in (0..first_dense as usize).rev() {
+            let (lower, upper) = levels.split_at_mut(l + 1);
+            lower[l].links = links(&lower[l], &upper[0]);
+        }
+        for level in &mut levels {
+            level.payload.shrink_to_fit();
+            level.child.shrink_to_fit();
+            level.mask.shrink_to_fit();
+            level.links.shrink_to_fit();
+        }
+        let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
+        if cfg!(debug_assertions) {
+            tree.validate()?;
+        }
+        Ok(tree)
+    }
+}
+
+/// Depth and finest dense level for a grid.
+fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
+    let needed = dims.max_element().next_power_of_two().trailing_zeros();
+    let depth = options.depth.unwrap_or(needed);
+    if depth > MAX_DEPTH {
+        return Err(Error::TooDeep { requested: depth, max: MAX_DEPTH });
+    }
+    if depth < needed {
+        return Err(Error::GridDoesNotFit { dims, depth, res: 1 << depth });
+    }
+    if options.dense_log2 > MAX_DENSE_LOG2 {
+        return Err(Error::DenseTooLarge {
+            requested_log2: options.dense_log2,
+            res: 1u64 << options.dense_log2.min(63),
+            max_log2: MAX_DENSE_LOG2,
+        });
+    }
+    Ok((depth, depth - options.dense_log2.min(depth)))
+}
+
+/// Checks the input in order, so the error names the first bad voxel.
+fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
+    voxels.iter().enumerate().try_for_each(|(i, &(code, ref p))| {
+        let coord = morton::decode(code);
+        if code >> 63 != 0 || !coord.cmplt(dims).all() {
+            return Err(Error::OutOfBounds { coord, dims });
+        }
+        if i > 0 {
+            let prev = voxels[i - 1].0;
+            if prev == code {
+                return Err(Error::DuplicateVoxel { coord });
+            }
+            if prev > code {
+                return Err(Error::OutOfOrder { coord, code });
+            }
+        }
+        match p.check() {
+            Some(reason) => Err(Error::InvalidPayload { coord, reason }),
+            None => Ok(()),
+        }
+    })
+}
+
+/// The occupied nodes one level up: distinct parents, each the prefilter of its children.
+fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
+    let c = &level.codes;
+    let starts: Vec<usize> =
+        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).collect();
+    let (codes, payload) = (0..starts.len())
+        .into_par_iter()
+        .map(|g| {
+            let end = starts.get(g + 1).copied().unwrap_or(c.len());
+            let mut children = [P::empty(); 8];
+            for i in starts[g]..end {
+                children[(c[i] & 7) as usize] = level.payload[i];
+            }
+            (c[starts[g]] >> 3, P::prefilter(&children))
+        })
+        .unzip();
+    Occupied { codes, payload }
+}
+
+/// Codes (one level up) of the parents of the backward closure of `occupied`, sorted, distinct.
+fn tile_parents(occupied: &[u64]) -> Vec<u64> {
+    let mut parents: Vec<u64> = occupied
+        .par_iter()
+        .flat_map_iter(|&code| {
+            let c = morton::decode(code);
+            (0..8u32).filter_map(move |d| {
+                let e = UVec3::new(d & 1, d >> 1 & 1, d >> 2 & 1);
+                c.cmpge(e).all().then(|| morton::encode(c - e) >> 3)
+            })
+        })
+        .collect();
+    parents.par_sort_unstable();
+    parents.dedup();
+    parents
+}
+
+/// Node indices, in a tiled level whose tiles' parents are `tiles`, of sorted `codes` that all
+/// lie in those tiles.
+fn locate(tiles: &[u64], codes: impl Iterator<Item = u64>) -> impl Iterator<Item = usize> {
+    let mut t = 0;
+    codes.map(move |code| {
+        while tiles[t] < code >> 3 {
+            t += 1;
+        }
+        debug_assert_eq!(tiles[t], code >> 3, "code {code} lies in no tile");
+        8 * t + (code & 7) as usize
+    })
+}
+
+/// A dense level; `below` (finest dense level only, above level 0) gives the occupied nodes and
+/// tile parents of the level under it, for child pointers and masks.
+fn dense_level<P: Payload>(
+    res_log2: u32,
+    occupied: &Occupied<P>,
+    below: Option<(&Occupied<P>, &[u64])>,
+) -> Level<P> {
+    let n = 1usize << (3 * res_log2);
+    let mut payload = vec![P::empty(); n];
+    for (&c, p) in occupied.codes.iter().zip(&occupied.payload) {
+        payload[c as usize] = *p;
+    }
+    let (mut child, mut mask) = (Vec::new(), Vec::new());
+    if let Some((occ_below, tiles_below)) = below {
+        child = vec![NONE; n];
+        mask = vec![0u8; n];
+        for (rank, &q) in tiles_below.iter().enumerate() {
+            child[q as usize] = 8 * rank as u32;
+        }
+        for &c in &occ_below.codes {
+            mask[(c >> 3) as usize] |= 1 << (c & 7);
+        }
+    }
+    Level { res_log2, dense: true, payload, child, mask, links: Vec::new() }
+}
+
+/// A sparse level made of the tiles of `tiles` (parents' codes); `below` as for
+/// [`dense_level`].
+fn sparse_level<P: Payload>(
+    res_log2: u32,
+    occupied: &Occupied<P>,
+    tiles: &[u64],
+    below: Option<(&Occupied<P>, &[u64])>,
+) -> Level<P> {
+    let n = 8 * tiles.len();
+    let mut payload = vec![P::empty(); n];
+    for (i, p) in locate(tiles, occupied.codes.iter().copied()).zip(&occupied.payload) {
+        payload[i] = *p;
+    }
+    let (mut child, mut mask) = (Vec::new(), Vec::new());
+    if let Some((occ_below, tiles_below)) = below {
+        child = vec![NONE; n];
+        mask = vec![0u8; n];
+        for (rank, i) in locate(tiles, tiles_below.iter().copied()).enumerate() {
+            child[i] = 8 * rank as u32;
+        }
+        let parents = occ_below.codes.iter().map(|c| c >> 3);
+        for (i, &c) in locate(tiles, parents).zip(&occ_below.codes) {
+            mask[i] |= 1 << (c & 7);
+        }
+    }
+    Level { res_log2, dense: false, payload, child, mask, links: Vec::new() }
+}
+
+/// Forward links of a sparse level from its parent level (links already built if sparse).
+fn links<P: Payload>(level: &Level<P>, parent: &Level<P>) -> Vec<[u32; 3]> {
+    let mut tile_parent = vec![NONE; level.payload.len() / 8];
+    for (p, &c) in parent.child.iter().enumerate() {
+        if c != NONE {
+            tile_parent[c as usize / 8] = p as u32;
+        }
+    }
+    let parent_res = 1u32 << parent.res_log2;
+    (0..level.payload.len())
+        .into_par_iter()
+        .map(|i| {
+            let (t, k) = (i / 8, (i % 8) as u32);
+            let p = tile_parent[t];
+            std::array::from_fn(|a| {
+                let bit = 1 << a;
+                if k & bit == 0 {
+                    return (8 * t) as u32 + (k | bit);
+                }
+                let q = if parent.dense {
+                    let mut c = morton::decode(p as u64);
+                    c[a] += 1;
+                    if c[a] < parent_res { morton::encode(c) as u32 } else { NONE }
+                } else {
+                    parent.links[p as usize][a]
+                };
+                match parent.child.get(q as usize) {
+                    Some(&ch) if ch != NONE => ch + (k & !bit),
+                    _ => NONE,
+                }
+            })
+        })
+        .collect()
+}
