@@ -29,6 +29,9 @@ use crate::{Error, Result};
 struct Occupied<P> {
     codes: Vec<u64>,
     payload: Vec<P>,
+    /// Per node (above level 0): bit `d` (`d = x + 2y + 4z ∈ {0,1}³`) set if the node minus `d`
+    /// is the parent of a backward neighbour of one of its occupied children ([`tile_parents`]).
+    shifts: Vec<u8>,
 }
 
 impl<P: Payload> Octree<P> {
@@ -91,14 +94,14 @@ impl<P: Payload> Octree<P> {
         check_input(grid.dims, &voxels)?;
         let voxel_count = voxels.len() as u64;
         let (codes, payload) = voxels.into_iter().unzip();
-        let mut occupied = vec![Occupied { codes, payload }];
+        let mut occupied = vec![Occupied { codes, payload, shifts: Vec::new() }];
         for l in 1..=depth as usize {
             let next = coarsen(&occupied[l - 1]);
             occupied.push(next);
         }
         // Tiles of each sparse level: parents of the backward closure.
         let tiles: Vec<Vec<u64>> =
-            occupied[..first_dense as usize].par_iter().map(|o| tile_parents(&o.codes)).collect();
+            occupied[1..=first_dense as usize].par_iter().map(tile_parents).collect();
         for (l, t) in tiles.iter().enumerate() {
             let nodes = 8 * t.len() as u64;
             if nodes >= NONE as u64 {
@@ -186,35 +189,61 @@ fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
     let c = &level.codes;
     let starts: Vec<usize> =
         (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).collect();
-    let (codes, payload) = (0..starts.len())
+    let (codes, (payload, shifts)) = (0..starts.len())
         .into_par_iter()
         .map(|g| {
             let end = starts.get(g + 1).copied().unwrap_or(c.len());
             let mut children = [P::empty(); 8];
+            let mut shifts = 0u8;
             for i in starts[g]..end {
                 children[(c[i] & 7) as usize] = level.payload[i];
+                shifts |= SUBSETS[(!c[i] & 7) as usize];
             }
-            (c[starts[g]] >> 3, P::prefilter(&children))
+            (c[starts[g]] >> 3, (P::prefilter(&children), shifts))
         })
         .unzip();
-    Occupied { codes, payload }
+    Occupied { codes, payload, shifts }
 }
 
-/// Codes (one level up) of the parents of the backward closure of `occupied`, sorted, distinct.
-fn tile_parents(occupied: &[u64]) -> Vec<u64> {
-    let mut parents: Vec<u64> = occupied
+/// `SUBSETS[m]`: bit `d` set for every `d ⊆ m` (3-bit sets).
+const SUBSETS: [u8; 8] = {
+    let mut t = [0u8; 8];
+    let mut m = 0;
+    while m < 8 {
+        let mut d = 0;
+        while d < 8 {
+            if d & !m == 0 {
+                t[m] |= 1 << d;
+            }
+            d += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// Codes of the parents of the backward closure of a level, sorted and distinct, from the
+/// occupied nodes one level up (`parents`). Child `o = 2q + b` of `q` has backward neighbours
+/// `o − d` whose parents are `q − d'` with `d'_a = d_a` where `b_a = 0` and `d'_a = 0` where
+/// `b_a = 1`: `d'` ranges over the subsets of the axes along which `o` is in the lower half.
+/// `Occupied::shifts` holds the union of those over the occupied children, so this enumerates
+/// the exact set from about a quarter as many nodes (on surfaces) as the children's closure.
+fn tile_parents<P>(parents: &Occupied<P>) -> Vec<u64> {
+    let mut out: Vec<u64> = parents
+        .codes
         .par_iter()
-        .flat_map_iter(|&code| {
-            let c = morton::decode(code);
+        .zip(&parents.shifts)
+        .flat_map_iter(|(&code, &shifts)| {
+            let q = morton::decode(code);
             (0..8u32).filter_map(move |d| {
                 let e = UVec3::new(d & 1, d >> 1 & 1, d >> 2 & 1);
-                c.cmpge(e).all().then(|| morton::encode(c - e) >> 3)
+                (shifts >> d & 1 == 1 && q.cmpge(e).all()).then(|| morton::encode(q - e))
             })
         })
         .collect();
-    parents.par_sort_unstable();
-    parents.dedup();
-    parents
+    out.par_sort_unstable();
+    out.dedup();
+    out
 }
 
 /// Node indices, in a tiled level whose tiles' parents are `tiles`, of sorted `codes` that all

@@ -75,8 +75,8 @@ impl<P: Payload> Octree<P> {
         for l in 0..=depth {
             self.check_payloads(l, &codes)?;
         }
-        for l in 0..fd {
-            self.check_sparse(l, &codes[l])?;
+        for (l, level_codes) in codes.iter().enumerate().take(fd) {
+            self.check_sparse(l, level_codes)?;
         }
         Ok(())
     }
@@ -91,7 +91,7 @@ impl<P: Payload> Octree<P> {
         if lv.dense && n != full {
             return fail(l, 0, format!("dense level holds {n} of {full} nodes"));
         }
-        if !lv.dense && (n % 8 != 0 || lv.links.len() != n) {
+        if !lv.dense && (!n.is_multiple_of(8) || lv.links.len() != n) {
             return fail(l, 0, format!("{n} nodes (tiles of 8), {} links", lv.links.len()));
         }
         if lv.dense && !lv.links.is_empty() {

@@ -177,3 +177,38 @@ fn a_missing_closure_node_is_found() {
     assert!(t.levels[1].payload[p].max_abs_diff(&AveragePayload::empty()) == 0.0);
     expect_broken(&t, 0, "lacks backward neighbour");
 }
+
+/// The node set of every sparse level is exactly the 2×2×2 tiles of the parents of the
+/// backward closure of the occupied nodes (the `octree` module's definition), computed here by
+/// brute force from the input voxels.
+#[test]
+fn sparse_levels_hold_exactly_the_tiles_of_the_backward_closure() {
+    use std::collections::BTreeSet;
+    for (dims, dense) in [(UVec3::splat(16), 1), (UVec3::new(13, 6, 16), 0), (UVec3::splat(32), 2)]
+    {
+        let coords: Vec<UVec3> = (0..60u32)
+            .map(|i| [i * 7 % dims.x, (i * i + 3) % dims.y, i * 5 / 3 % dims.z])
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .map(UVec3::from)
+            .collect();
+        let t = build(dims, &coords, dense);
+        for l in 0..t.first_dense() {
+            let occupied: BTreeSet<[u32; 3]> =
+                coords.iter().map(|&c| (c >> l).to_array()).collect();
+            let mut parents = BTreeSet::new();
+            for o in occupied {
+                let o = UVec3::from(o);
+                for d in 0..8u32 {
+                    let e = UVec3::new(d & 1, d >> 1 & 1, d >> 2 & 1);
+                    if o.cmpge(e).all() {
+                        parents.insert(voxlod_format::morton::encode((o - e) >> 1));
+                    }
+                }
+            }
+            let want: Vec<u64> =
+                parents.iter().flat_map(|p| (0..8).map(move |k| p << 3 | k)).collect();
+            assert_eq!(t.node_codes(l), want, "level {l} of {dims}");
+        }
+    }
+}
