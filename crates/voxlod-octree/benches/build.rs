@@ -10,7 +10,8 @@
 //! - `build/averages`, `build/averages+directional`: the same with Averages pre-filtering (28
 //!   bytes), and with six directional opacities on top;
 //! - `sample/*`: quadrilinear samples at random points near the shell, footprints 1–16 voxels,
-//!   and trilinear samples at level 0.
+//!   in random order and in Morton order (coherent, as the steps of neighbouring cones are), and
+//!   trilinear samples at level 0.
 
 use std::hint::black_box;
 
@@ -160,6 +161,19 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let mut acc = 0.0;
             for &(p, d) in &points {
+                acc += tree.sample(black_box(p), d).opacity;
+            }
+            acc
+        })
+    });
+    // The same points in Morton order of their voxel: neighbouring samples share nodes, as the
+    // steps of one cone and neighbouring pixels' cones do.
+    let mut coherent = points.clone();
+    coherent.sort_by_key(|(p, _)| morton::encode(p.max(Vec3::ZERO).as_uvec3()));
+    g.bench_function("quadrilinear_coherent", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for &(p, d) in &coherent {
                 acc += tree.sample(black_box(p), d).opacity;
             }
             acc

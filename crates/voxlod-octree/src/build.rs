@@ -142,7 +142,7 @@ impl<P: Payload> Octree<P> {
 }
 
 /// Depth and finest dense level for a grid.
-fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
+pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
     let needed = dims.max_element().next_power_of_two().trailing_zeros();
     let depth = options.depth.unwrap_or(needed);
     if depth > MAX_DEPTH {

@@ -12,10 +12,12 @@
 //! | `sample` | [`Octree::sample`] (position + footprint diameter), [`Octree::sample_level`] |
 //! | `validate` | [`Octree::validate`]: every structural invariant |
 //! | [`stats`] | [`MemoryStats`]: nodes per level, bytes by role, bytes per voxel |
+//! | [`flat`] | [`FlatOctree`]: the `#[repr(C)]` GPU layout, and a CPU emulation of the lock-free level-by-level GPU build |
 //!
 //! This crate depends on `voxlod-format` only (no GPU API, no scene crate), so another project
 //! can use it alone. Out of scope: merging virtual-mesh records across levels (open research,
-//! seed 000 §6), light injection and cone tracing (`voxlod-cone`), the GPU build.
+//! seed 000 §6), light injection and cone tracing (`voxlod-cone`), the wgpu kernel of the build (its
+//! algorithm is emulated and checked in [`flat`]).
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
@@ -46,6 +48,7 @@
 
 mod build;
 mod error;
+pub mod flat;
 pub mod octree;
 pub mod payload;
 mod sample;
@@ -53,6 +56,7 @@ pub mod stats;
 mod validate;
 
 pub use error::{Error, Result};
+pub use flat::{FlatOctree, GpuLevel, GpuNode};
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 pub use payload::{AveragePayload, DIRECTIONS, Directional, Payload, SggxPayload};
 pub use stats::{LevelStats, MemoryStats};
