@@ -312,6 +312,23 @@ mod tests {
         assert_eq!(size_of::<AveragePayload>(), 28);
     }
 
+    #[test]
+    fn level_by_level_build_rejects_bad_input() {
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(4)).unwrap();
+        let ok = AveragePayload::new(Vec3::ONE, Vec3::Z, 0.5);
+        let opts = BuildOptions::default();
+        let dup = [(UVec3::ONE, ok), (UVec3::ZERO, ok), (UVec3::ONE, ok)];
+        let e = FlatOctree::build_level_by_level(grid, &dup, &opts).unwrap_err();
+        assert!(matches!(e, Error::DuplicateVoxel { coord } if coord == UVec3::ONE), "{e}");
+        let e = FlatOctree::build_level_by_level(grid, &[(UVec3::new(0, 4, 0), ok)], &opts);
+        assert!(matches!(e, Err(Error::OutOfBounds { .. })));
+        let nan = AveragePayload::new(Vec3::ONE, Vec3::Z, f32::NAN);
+        let e = FlatOctree::build_level_by_level(grid, &[(UVec3::new(1, 2, 3), nan)], &opts);
+        assert!(
+            matches!(e, Err(Error::InvalidPayload { coord, .. }) if coord == UVec3::new(1, 2, 3))
+        );
+    }
+
     /// The emulated lock-free build gives the reference topology exactly (same Morton order,
     /// no sort needed) and its payloads within float tolerance.
     #[test]

@@ -151,11 +151,14 @@ impl<P: Payload> Octree<P> {
     /// derived from the child pointers top-down (the octree stores no coordinates). Strictly
     /// increasing for a valid octree. Panics if `level > depth()`.
     pub fn node_codes(&self, level: u32) -> Vec<u64> {
-        let mut codes: Vec<u64> =
-            (0..self.levels[self.first_dense as usize].payload.len() as u64).collect();
+        let count = |l: u32| self.levels[l as usize].payload.len();
+        if level >= self.first_dense {
+            return (0..count(level) as u64).collect();
+        }
+        let mut codes: Vec<u64> = (0..count(self.first_dense) as u64).collect();
         for l in (level..self.first_dense).rev() {
             let parent = &self.levels[l as usize + 1];
-            let mut next = vec![0u64; self.levels[l as usize].payload.len()];
+            let mut next = vec![0u64; count(l)];
             for (p, &c) in parent.child.iter().enumerate() {
                 if c != NONE {
                     for k in 0..8u64 {
@@ -166,9 +169,6 @@ impl<P: Payload> Octree<P> {
                 }
             }
             codes = next;
-        }
-        if level > self.first_dense {
-            return (0..self.levels[level as usize].payload.len() as u64).collect();
         }
         codes
     }

@@ -67,7 +67,7 @@ impl<P: Payload> Octree<P> {
             return out;
         }
         let res = 1i32 << (self.depth - level);
-        let u = pos * (-(level as f32)).exp2() - 0.5;
+        let u = pos * (1.0 / (1u32 << level) as f32) - 0.5;
         let lower = u.floor();
         if lower.cmplt(Vec3::splat(-1.0)).any() || lower.cmpge(Vec3::splat(res as f32)).any() {
             return out;

@@ -23,7 +23,8 @@ pub struct LevelStats {
     pub dense: bool,
     /// Stored nodes (dense: `resolution³`).
     pub nodes: u64,
-    /// Nodes whose subtree holds an input voxel.
+    /// Nodes whose subtree holds an input voxel (from the masks; on dense levels above the
+    /// finest dense one, which store no masks: nodes with a non-empty payload).
     pub occupied: u64,
 }
 
