@@ -16,7 +16,10 @@
 //!   the front child is the one a ray travelling in that direction enters first (lower
 //!   coordinate for +x). It is the opacity of crossing the whole parent node along that axis,
 //!   which the isotropic mean opacity (coverage) underestimates for a thin wall seen face-on.
-//!   It is not linear, so only the isotropic part obeys the dense-grid equality above.
+//!   It is not linear, so only the isotropic part obeys the dense-grid equality above. It also
+//!   assumes the coverage of the two composited children uncorrelated: partial coverage that is
+//!   aligned across layers (a wall seen edge-on) is over-estimated — a one-voxel wall across an
+//!   8³ grid seen along its plane gets 0.305 at the root instead of its true 1/8 (tested).
 //! - **Virtual-mesh records** (seed 000) are not supported: merging them across levels is open
 //!   research (seed 000 §6) and out of scope.
 

@@ -4,10 +4,11 @@
 //! ESVO (Laine & Karras 2010) spends about 1 byte of topology per voxel: one 32-bit child
 //! descriptor per parent, children stored only where occupied. This layout spends, per node of a
 //! sparse level, 5 bytes of topology above level 0 (`child: u32`, `mask: u8`) and **12 bytes of
-//! forward links on every level** (`[u32; 3]`), on the occupied nodes *and* on the nodes the
-//! backward closure and the 2×2×2 tiles add (`octree` module docs), which on surfaces are
-//! several times the occupied ones. [`MemoryStats`] measures each part; the crate README gives
-//! the figures for a sphere shell (`benches/build.rs`).
+//! forward links on every sparse level, leaves included** (`[u32; 3]`), on the occupied nodes
+//! *and* on the nodes the backward closure and the 2×2×2 tiles add (`octree` module docs),
+//! which on surfaces are several times the occupied ones. [`MemoryStats`] measures each part;
+//! the crate README gives the figures for a sphere shell (`benches/build.rs`): 5.3 B/voxel of
+//! topology and 60.9 B/voxel of links.
 
 use crate::octree::Octree;
 use crate::payload::Payload;
