@@ -1,0 +1,142 @@
+//! One cone marched front to back through an octree: the definitions every tracer of this
+//! crate shares.
+//!
+//! # Definitions (the one place they are written; the code below is their only implementation)
+//! - **Aperture** is the cone's **full** apex angle θ (the angle between two opposite
+//!   generatrices), in \[0°, 180°). At distance `t` from the apex the cone's **diameter** is
+//!   `d(t) = 2·t·tan(θ/2)`. θ = 0 is a ray.
+//! - **Footprint**: a sample at distance `t` reads the octree with diameter `max(d(t), 1)` voxels,
+//!   i.e. at the fractional level [`voxlod_octree::Octree::level_for_diameter`] (level 0 for a
+//!   ray, the root for a near-180° cone), quadrilinearly.
+//! - **Step**: the next sample is `step_factor · max(d(t), 1 voxel)` further along the axis.
+//! - **Opacity correction**: a node of level `l` is `2^l` voxels wide and its opacity is that of
+//!   crossing it; a step of length `s` crosses `s / 2^l` of it, so the sample's opacity becomes
+//!   `α' = 1 − (1 − α)^(s / 2^l)`, with `s` capped at the distance left to the cube's exit (a
+//!   near-180° cone's first step is astronomically long, but the matter it crosses is not).
+//! - **Front-to-back accumulation**: `w = (1 − A)·α'`, `L += w·radiance`, `A += w`, stopping when
+//!   `A ≥ opacity_cutoff`, beyond `max_distance`, or when the axis leaves the octree's cube
+//!   (`[−1, 2^depth + 1]³` voxels).
+//! - **Occlusion with falloff** (ambient occlusion): `O += w·f(r)`, where `r` is the distance of
+//!   the sample from the shading point and `f(r) = max(0, 1 − r/R)` for AO radius `R`
+//!   ([`falloff`], the function the ray-traced reference in voxlod-cpu uses with the hit
+//!   distance).
+
+use glam::{DVec3, Vec3};
+use voxlod_octree::Octree;
+
+use crate::medium::ConeMedium;
+
+/// The AO falloff `f(r) = max(0, 1 − r/R)`: how much an occluder at distance `r` from the
+/// shading point occludes, for AO radius `R > 0` (1 at the point, 0 from `R` on). The ray-traced
+/// reference applies it to the first hit's distance.
+#[inline]
+pub fn falloff(r: f32, radius: f32) -> f32 {
+    (1.0 - r / radius).clamp(0.0, 1.0)
+}
+
+/// A cone in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// Apex (world position).
+    pub apex: Vec3,
+    /// Unit axis direction.
+    pub dir: Vec3,
+    /// Full apex angle in radians, in \[0, π) (module docs).
+    pub aperture: f32,
+}
+
+/// Where and how far a [`Cone`] marches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct March {
+    /// Distance of the first sample from the apex, in voxels (level-0 voxel edges).
+    pub start_voxels: f32,
+    /// Step length as a fraction of the footprint diameter (module docs), > 0.
+    pub step_factor: f32,
+    /// Stop beyond this distance from the apex (world units; `f32::INFINITY` for none).
+    pub max_distance: f32,
+    /// Stop when the accumulated opacity reaches this, in (0, 1\].
+    pub opacity_cutoff: f32,
+    /// For AO: the shading point (the apex minus the normal offset) and the radius `R` of
+    /// [`falloff`]; `None` accumulates no occlusion.
+    pub ao: Option<(Vec3, f32)>,
+}
+
+/// What a cone gathered.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ConeResult {
+    /// Radiance arriving at the apex along the cone (front-to-back composited).
+    pub radiance: Vec3,
+    /// Accumulated opacity `A` in \[0, 1\].
+    pub opacity: f32,
+    /// Falloff-weighted occlusion `O` in \[0, 1\] (zero unless [`March::ao`] is set).
+    pub occlusion: f32,
+    /// Octree samples taken (each a quadrilinear read).
+    pub steps: u32,
+}
+
+/// Parameter interval `[t0, t1]` where `o + t·d` lies inside the box `[lo, hi]³` (empty if
+/// `t0 > t1`).
+fn slab(o: Vec3, d: Vec3, lo: f32, hi: f32) -> (f32, f32) {
+    let inv = d.recip();
+    let a = (Vec3::splat(lo) - o) * inv;
+    let b = (Vec3::splat(hi) - o) * inv;
+    // Axis-parallel rays: inv = ±inf and a, b = ±inf (or NaN when o is on the plane: treated
+    // as inside by max/min ignoring NaN).
+    let t0 = a.min(b).max_element();
+    let t1 = a.max(b).min_element();
+    (t0, t1)
+}
+
+/// Marches `cone` through `tree` (module docs). Non-finite apex or direction gathers nothing.
+pub fn trace<M: ConeMedium>(tree: &Octree<M>, cone: &Cone, march: &March) -> ConeResult {
+    let mut out = ConeResult::default();
+    let grid = tree.grid();
+    let voxel = grid.voxel_size as f32;
+    if !(cone.apex.is_finite() && cone.dir.is_finite() && voxel > 0.0) {
+        return out;
+    }
+    let dir = cone.dir.normalize_or_zero();
+    if dir == Vec3::ZERO {
+        return out;
+    }
+    let origin = grid.to_grid(DVec3::from(cone.apex)).as_vec3();
+    let res = (1u64 << tree.depth()) as f32;
+    let (enter, exit) = slab(origin, dir, -1.0, res + 1.0);
+    let max_t = (march.max_distance / voxel).min(exit);
+    let two_tan = 2.0 * (0.5 * cone.aperture.clamp(0.0, std::f32::consts::PI)).tan().max(0.0);
+    let mut t = march.start_voxels.max(0.0).max(enter);
+    let (ao_point, ao_radius) = match march.ao {
+        Some((p, r)) => (grid.to_grid(DVec3::from(p)).as_vec3(), r / voxel),
+        None => (origin, 0.0),
+    };
+    let apex_offset = origin.distance(ao_point);
+    let mut a = 0.0f32;
+    while t <= max_t && a < march.opacity_cutoff {
+        let d = (two_tan * t).max(1.0);
+        let d = if d.is_finite() { d } else { f32::MAX };
+        let p = origin + dir * t;
+        let level = tree.level_for_diameter(d);
+        let s = tree.sample_at_level(p, level);
+        out.steps += 1;
+        let step = march.step_factor * d;
+        let alpha = s.opacity_toward(dir).clamp(0.0, 1.0);
+        if alpha > 0.0 {
+            let node = level.exp2();
+            let crossed = step.min((exit - t).max(0.0));
+            let corrected = 1.0 - (1.0 - alpha).powf(crossed / node);
+            let w = (1.0 - a) * corrected.clamp(0.0, 1.0);
+            out.radiance += w * s.radiance();
+            if ao_radius > 0.0 {
+                out.occlusion += w * falloff(p.distance(ao_point), ao_radius);
+            }
+            a += w;
+        }
+        if ao_radius > 0.0 && t - apex_offset > ao_radius {
+            break; // every further sample is farther than R from the shading point
+        }
+        t += step;
+    }
+    out.opacity = a.clamp(0.0, 1.0);
+    out.occlusion = out.occlusion.clamp(0.0, 1.0);
+    out
+}
