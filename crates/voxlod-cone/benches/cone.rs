@@ -108,26 +108,35 @@ fn bench(c: &mut Criterion) {
     });
     g.finish();
 
-    let full = shading_points(&geometry, 1280, 720);
     let eye = Vec3::new(32.0, 40.0, 60.0);
+    let frame = |points: &[(Vec3, Vec3)]| -> Vec<Vec3> {
+        points
+            .par_iter()
+            .map(|&(p, n)| {
+                let (_, d, _) = tracer.ao_and_diffuse(p, n, false, true);
+                let s = tracer.specular(p, n, (eye - p).normalize(), 0.5);
+                d + s.radiance
+            })
+            .collect()
+    };
+    let quarter = shading_points(&geometry, 320, 180);
     let mut g = c.benchmark_group("frame");
     g.sample_size(10);
-    g.throughput(Throughput::Elements(full.len() as u64));
-    g.bench_function("1280x720_6_diffuse_1_specular", |b| {
-        b.iter(|| {
-            let img: Vec<Vec3> = full
-                .par_iter()
-                .map(|&(p, n)| {
-                    let (_, d, _) = tracer.ao_and_diffuse(p, n, false, true);
-                    let s = tracer.specular(p, n, (eye - p).normalize(), 0.5);
-                    d + s.radiance
-                })
-                .collect();
-            black_box(img)
-        })
-    });
+    g.throughput(Throughput::Elements(quarter.len() as u64));
+    g.bench_function("320x180_6_diffuse_1_specular", |b| b.iter(|| black_box(frame(&quarter))));
     g.finish();
-    let _ = black_box(&steps);
+
+    // One full 1280×720 frame, timed once (criterion's 10 samples would take minutes on a
+    // loaded 2-core machine).
+    let full = shading_points(&geometry, 1280, 720);
+    let start = std::time::Instant::now();
+    black_box(frame(&full));
+    let t = start.elapsed();
+    println!(
+        "frame/1280x720_6_diffuse_1_specular (one run, {} threads): {:.3} s",
+        rayon::current_num_threads(),
+        t.as_secs_f64()
+    );
 }
 
 criterion_group!(benches, bench);
