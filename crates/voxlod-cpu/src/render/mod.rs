@@ -7,6 +7,8 @@
 //! - [`dda`]: the voxel walk every voxel renderer and voxel shadow ray uses, with
 //!   [`bricks`] for the brick look-ups it skips empty space with.
 //! - [`sampling`]: sub-pixel patterns and random streams.
+//! - [`indirect`]: ray-traced AO and one-bounce diffuse indirect light, the references of
+//!   voxel cone tracing.
 //!
 //! Every renderer calls [`crate::shading::shade`], generates camera rays with
 //! `CameraFrame::ray_dir`, draws random numbers from [`crate::random`], and returns a linear
@@ -17,6 +19,7 @@ pub mod bricks;
 pub mod dda;
 pub mod filtered;
 pub mod ground_truth;
+pub mod indirect;
 pub mod sampling;
 pub(crate) mod surface;
 
