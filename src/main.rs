@@ -38,6 +38,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Render(a) => commands::render(&ui, a),
         cli::Command::CompareImages(a) => commands::compare_images(a),
         cli::Command::Compare(a) => commands::compare(&ui, a),
+        cli::Command::Cone(a) => commands::cone(&ui, a),
         cli::Command::Info(a) => commands::info(a),
         cli::Command::Scenes => commands::scenes(),
     }

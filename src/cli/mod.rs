@@ -36,6 +36,9 @@ pub enum Command {
     /// Measure every filtered-appearance representation of a scene against its ground truth:
     /// error, memory, precompute and render time, as tables, plots and an image grid.
     Compare(CompareSceneArgs),
+    /// Voxel cone tracing on a sparse voxel octree: AO and one-bounce indirect light against
+    /// ray-traced references, over cone count × aperture × octree depth × step, and light leaking.
+    Cone(ConeArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
     /// List the builtin scenes and their parameters.
@@ -150,6 +153,40 @@ pub struct CompareSceneArgs {
     pub thresholds: Vec<f32>,
     /// Output directory.
     #[arg(short, long, default_value = "out/compare")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod cone`.
+#[derive(Debug, Args)]
+pub struct ConeArgs {
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
+    pub scene: String,
+    /// Voxel resolutions (voxels along the longest axis; octree depth = log2), comma-separated.
+    #[arg(long, default_value = "32,64", value_delimiter = ',')]
+    pub res: Vec<u32>,
+    /// Diffuse cone counts, comma-separated.
+    #[arg(long, default_value = "1,6,16", value_delimiter = ',')]
+    pub cones: Vec<u32>,
+    /// Full cone apertures in degrees, comma-separated.
+    #[arg(long, default_value = "15,30,60", value_delimiter = ',')]
+    pub apertures: Vec<f32>,
+    /// Step lengths as fractions of the cone diameter, comma-separated.
+    #[arg(long, default_value = "0.5,1", value_delimiter = ',')]
+    pub steps: Vec<f32>,
+    /// Image side in pixels.
+    #[arg(long, default_value_t = 64)]
+    pub size: u32,
+    /// Rays per pixel of the ray-traced references.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    /// AO radius as a fraction of the scene's bounding-box diagonal.
+    #[arg(long, default_value_t = 0.1)]
+    pub ao_radius: f32,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/cone")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]

@@ -2,6 +2,7 @@
 //! outputs atomically, and returns errors with context for `main` to print.
 
 mod compare;
+mod cone;
 mod info;
 mod render;
 mod report;
@@ -14,6 +15,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 pub use compare::compare;
+pub use cone::cone;
 pub use info::info;
 pub use render::render;
 pub use report::report;

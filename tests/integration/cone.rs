@@ -1,0 +1,65 @@
+//! `voxlod cone` end to end on a tiny setting (issue 5): the sweep's rows, the references'
+//! noise, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
+//! shared by the cone tracer and the ray-traced reference.
+
+use std::process::Command;
+
+#[test]
+fn cone_and_reference_share_the_ao_falloff() {
+    for r in [0.01f32, 1.0, 37.5] {
+        for i in 0..=40 {
+            let t = r * i as f32 / 20.0;
+            assert_eq!(
+                voxlod_cone::falloff(t, r),
+                voxlod::cpu::render::indirect::falloff(t, r),
+                "t {t}, R {r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn cone_command_measures_the_sweep_and_the_leaks() {
+    let dir = std::env::temp_dir().join(format!("voxlod-cone-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_voxlod"))
+        .args(["cone", "builtin:cube", "--res", "8,16", "--cones", "1,6", "--apertures", "30"])
+        .args(["--steps", "0.5", "--size", "16", "--spp", "16", "--json", "--quiet", "-o"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    for r in rows {
+        let (mse, ssim) = (r["ao_mse"].as_f64().unwrap(), r["ao_ssim"].as_f64().unwrap());
+        assert!(mse.is_finite() && mse >= 0.0 && ssim <= 1.0, "{r}");
+        assert!(r["steps_per_pixel"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    assert_eq!(rows[0]["depth"], 3);
+    assert_eq!(rows[2]["depth"], 4);
+    let noise = v["reference_noise_mse"].as_array().unwrap();
+    assert!(noise.iter().all(|x| x.as_f64().unwrap() >= 0.0));
+    // Leaks: 3 depths × 1 step × 2 options, each a fraction in [0, 1].
+    let leaks = v["leaks"].as_array().unwrap();
+    assert_eq!(leaks.len(), 6);
+    for l in leaks {
+        let f = l["leak"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&f), "{l}");
+    }
+    assert!(dir.join("report.md").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+
+    for (args, needle) in [
+        (vec!["cone", "builtin:cube", "--res", "12"], "--res 12"),
+        (vec!["cone", "builtin:cube", "--apertures", "180"], "--apertures 180"),
+        (vec!["cone", "no/such/file.obj"], "no/such/file.obj"),
+    ] {
+        let out =
+            Command::new(env!("CARGO_BIN_EXE_voxlod")).args(&args).arg("--quiet").output().unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
