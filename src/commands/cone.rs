@@ -174,6 +174,7 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
     let (lo, hi) = scene.bounds()?;
     let radius = args.ao_radius * (hi - lo).length();
     let gb = ground_truth::gbuffer(&scene, &geometry, &bvh, &camera, args.size, args.size)?;
+    let hits = gb.texels.iter().filter(|t| t.triangle != u32::MAX).count();
     say("ray-traced references");
     let opts = |seed| indirect::Options { spp: args.spp, seed, ao_radius: radius };
     let t = Instant::now();
@@ -245,6 +246,21 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
                     let ao: Vec<f32> = out.iter().map(|o| o.0).collect();
                     let e: Vec<Vec3> = out.iter().map(|o| o.1).collect();
                     let steps: u64 = out.iter().map(|o| o.2 as u64).sum();
+                    // Geometry in view but not one octree sample: every cone left the octree's
+                    // cube at its apex. That happens when no surface sees another (a convex
+                    // scene such as builtin:cube, whose visible faces lie on the grid's
+                    // boundary): the references are then exactly AO 1 and no indirect light,
+                    // the cones agree with them trivially, and a row of MSE 0 / SSIM 1 would
+                    // report a measurement that was never made.
+                    ensure!(
+                        hits == 0 || steps > 0,
+                        "{}: no cone took an octree sample ({res}³, {cones} cones, {aperture}°, \
+                         step {step}) although {hits} pixels see geometry: no surface in view \
+                         sees another (a convex scene: AO 1 and no indirect light everywhere), \
+                         so there is nothing to measure; use a scene with occlusion, e.g. \
+                         builtin:cornell",
+                        args.scene
+                    );
                     let ma = voxlod::eval::compare(&gray(&gb, &ao), &ao_ref_img)?;
                     let mi = voxlod::eval::compare(&colour(&gb, &e), &ind_ref_img)?;
                     rows.push(ConeRow {

@@ -23,7 +23,7 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     let dir = std::env::temp_dir().join(format!("voxlod-cone-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let out = Command::new(env!("CARGO_BIN_EXE_voxlod"))
-        .args(["cone", "builtin:cube", "--res", "8,16", "--cones", "1,6", "--apertures", "30"])
+        .args(["cone", "builtin:cornell", "--res", "8,16", "--cones", "1,6", "--apertures", "30"])
         .args(["--steps", "0.5", "--size", "16", "--spp", "16", "--json", "--quiet", "-o"])
         .arg(&dir)
         .output()
@@ -37,6 +37,9 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         assert!(mse.is_finite() && mse >= 0.0 && ssim <= 1.0, "{r}");
         assert!(r["steps_per_pixel"].as_f64().unwrap() > 0.0, "{r}");
     }
+    // The Cornell box occludes itself and bounces light: the cones measure something.
+    assert!(rows.iter().any(|r| r["ao_mse"].as_f64().unwrap() > 0.0), "{rows:?}");
+    assert!(rows.iter().all(|r| r["ao_ssim"].as_f64().unwrap() < 1.0), "{rows:?}");
     assert_eq!(rows[0]["depth"], 3);
     assert_eq!(rows[2]["depth"], 4);
     let noise = v["reference_noise_mse"].as_array().unwrap();
@@ -55,6 +58,23 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         (vec!["cone", "builtin:cube", "--res", "12"], "--res 12"),
         (vec!["cone", "builtin:cube", "--apertures", "180"], "--apertures 180"),
         (vec!["cone", "no/such/file.obj"], "no/such/file.obj"),
+        // Convex: no surface sees another, every cone leaves the octree at its apex; an error,
+        // not a row of MSE 0 / SSIM 1 measured from no sample.
+        (
+            vec![
+                "cone",
+                "builtin:cube",
+                "--res",
+                "8",
+                "--cones",
+                "1",
+                "--size",
+                "16",
+                "--spp",
+                "4",
+            ],
+            "no cone took an octree sample",
+        ),
     ] {
         let out =
             Command::new(env!("CARGO_BIN_EXE_voxlod")).args(&args).arg("--quiet").output().unwrap();
