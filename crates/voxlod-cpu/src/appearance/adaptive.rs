@@ -469,6 +469,16 @@ impl Appearance for AdaptiveGrid {
             }
         }
     }
+
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        let r = self.tag(index);
+        let i = r.index() as usize;
+        match r.kind() {
+            Kind::Average => self.averages[i].needs_visibility((), to_viewer, light),
+            Kind::Sggx => self.sggx[i].needs_visibility((), to_viewer, light),
+            Kind::VirtualMesh => self.vmesh[i].needs_visibility(self.rule, to_viewer, light),
+        }
+    }
 }
 
 #[cfg(test)]
