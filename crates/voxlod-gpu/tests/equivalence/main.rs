@@ -1,6 +1,6 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
-//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`]),
+//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -10,7 +10,10 @@
 //! No adapter at all is a failure (loudly), unless `VOXLOD_ALLOW_NO_GPU=1`
 //! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
 
+mod ground_truth;
 mod harness;
+mod images;
+mod random;
 mod raycast;
 mod voxelize;
 
@@ -35,6 +38,8 @@ fn equivalence_suite() {
         suite.run("voxelize (proptest)", backend, voxelize::property);
         suite.run("raycast (scenes)", backend, raycast::scenes);
         suite.run("raycast (proptest)", backend, raycast::property);
+        suite.run("random (exact)", backend, random::exact);
+        suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
     }
     suite.finish();
 }
