@@ -61,6 +61,7 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
     let mut measures = Vec::new();
     for (name, scene, options) in scenes() {
         let expected = cpu(&scene, &options)?;
+        let start = std::time::Instant::now();
         let m = match &kernel {
             None => {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -102,4 +103,92 @@ fn backend_slug(backend: &Backend) -> String {
         .map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' })
         .take(24)
         .collect()
+}
+
+/// Random cameras (direction, distance, field of view, seed, shadows on/off) on `cornell` and
+/// `blinds`, 24×20 pixels at 4 rays per pixel, each image within the bound of [`scenes_body`]
+/// (`PROPTEST_CASES` sets how many; 24 by default, the same cases on every backend).
+pub fn property(backend: &Backend) -> Result<Measure, String> {
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+    let kernel = match backend {
+        Backend::Cpu => None,
+        Backend::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
+    };
+    let b = |name, kv: &[(&str, &str)]| voxlod_scene::procedural::builtin(name, kv).unwrap();
+    let scenes = [b("cornell", &[]), b("blinds", &[("slats", "8"), ("tilt", "-20")])];
+    let uploaded = match &kernel {
+        None => Vec::new(),
+        Some(k) => scenes
+            .iter()
+            .map(|s| {
+                let g = s.geometry();
+                let bvh = Bvh::new(&g).map_err(|e| e.to_string())?;
+                k.upload(s, &g, &bvh).map_err(|e| e.to_string())
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+    };
+    let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
+    let mut runner = TestRunner::new_with_rng(
+        Config { cases, ..Config::default() },
+        TestRng::deterministic_rng(RngAlgorithm::ChaCha),
+    );
+    let strategy = (
+        0usize..2,
+        (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0),
+        0.3f32..2.0,
+        20.0f32..90.0,
+        any::<u32>(),
+        any::<bool>(),
+    );
+    let worst = std::cell::Cell::new(0.0f64);
+    let count = std::cell::Cell::new(0usize);
+    let slowest = std::cell::RefCell::new((0.0f64, String::new()));
+    let result = runner.run(&strategy, |(which, (x, y, z), zoom, fov, seed, shadows)| {
+        let dir = glam::Vec3::new(x, y, z);
+        prop_assume!(dir.length() > 0.1);
+        let scene = &scenes[which];
+        let (lo, hi) = scene.bounds().unwrap();
+        let radius = (hi - lo).length() * 0.5;
+        let camera = voxlod_scene::Camera::framing(dir, (lo + hi) * 0.5, radius * zoom, fov);
+        let options =
+            Options { width: 24, height: 20, spp: 4, seed, shadows, ..Options::default() };
+        let g = scene.geometry();
+        let bvh = Bvh::new(&g).unwrap();
+        let expected = render(scene, &g, &bvh, &camera, &options).unwrap().image;
+        let start = std::time::Instant::now();
+        let m = match &kernel {
+            None => {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+                let one = pool.install(|| render(scene, &g, &bvh, &camera, &options)).unwrap();
+                compare("gt-property-cpu", &one.image, &expected, EXACT)
+            }
+            Some(k) => {
+                let actual = k.render(&uploaded[which], &camera, &options);
+                let actual = actual.map_err(|e| TestCaseError::fail(e.to_string()))?;
+                compare("gt-property-gpu", &actual, &expected, GPU_BOUND)
+            }
+        };
+        count.set(count.get() + 1);
+        worst.set(worst.get().max(m.max_error));
+        let secs = start.elapsed().as_secs_f64();
+        if secs > slowest.borrow().0 {
+            *slowest.borrow_mut() = (
+                secs,
+                format!("{which} {dir} zoom {zoom} fov {fov} seed {seed} shadows {shadows}"),
+            );
+        }
+        prop_assert!(m.pass, "{}", m.note);
+        Ok(())
+    });
+    let bound = if kernel.is_some() { 1.0 - GPU_BOUND.fraction } else { 0.0 };
+    let (secs, case) = slowest.into_inner();
+    let mut note = format!(
+        "{} random cameras on cornell and blinds, 24×20 at 4 spp; slowest case {secs:.2} s ({case})",
+        count.get()
+    );
+    if let Err(e) = &result {
+        note += &format!("; minimal failing case: {e}");
+    }
+    Ok(Measure { max_error: worst.get(), bound, pass: result.is_ok(), note })
 }

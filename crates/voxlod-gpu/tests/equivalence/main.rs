@@ -40,6 +40,7 @@ fn equivalence_suite() {
         suite.run("raycast (proptest)", backend, raycast::property);
         suite.run("random (exact)", backend, random::exact);
         suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
+        suite.run("ground truth (proptest)", backend, ground_truth::property);
     }
     suite.finish();
 }
