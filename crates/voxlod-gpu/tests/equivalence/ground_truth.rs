@@ -61,7 +61,6 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
     let mut measures = Vec::new();
     for (name, scene, options) in scenes() {
         let expected = cpu(&scene, &options)?;
-        let start = std::time::Instant::now();
         let m = match &kernel {
             None => {
                 let pool = rayon::ThreadPoolBuilder::new()
