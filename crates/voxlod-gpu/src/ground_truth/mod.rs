@@ -165,12 +165,26 @@ pub struct GpuScene {
 pub struct GroundTruthKernel<'a> {
     ctx: &'a Context,
     pipeline: wgpu::ComputePipeline,
+    rays_per_dispatch: u64,
 }
 
 impl<'a> GroundTruthKernel<'a> {
     /// Compiles the kernel.
     pub fn new(ctx: &'a Context) -> Result<Self> {
-        Ok(Self { ctx, pipeline: ctx.pipeline("ground truth", WGSL)? })
+        Ok(Self {
+            ctx,
+            pipeline: ctx.pipeline("ground truth", WGSL)?,
+            rays_per_dispatch: RAYS_PER_DISPATCH,
+        })
+    }
+
+    /// Sets the most camera rays per dispatch (at least one sample of every pixel per
+    /// dispatch whatever the value): smaller keeps each dispatch shorter. The image does not
+    /// depend on it — the samples are added in the same order — which the equivalence suite
+    /// checks bit for bit.
+    pub fn with_rays_per_dispatch(mut self, rays: u64) -> Self {
+        self.rays_per_dispatch = rays.max(1);
+        self
     }
 
     /// Uploads `scene` (flattened to `geometry`, with `bvh` over it) after the CPU renderer's
@@ -219,7 +233,7 @@ impl<'a> GroundTruthKernel<'a> {
             Light::Point { position, intensity } => (true, position, intensity),
         };
         let flags = u32::from(shadows) | if point { 2 } else { 0 };
-        let per_dispatch = (RAYS_PER_DISPATCH / pixels).clamp(1, spp as u64) as u32;
+        let per_dispatch = (self.rays_per_dispatch / pixels).clamp(1, spp as u64) as u32;
         let layout = self.pipeline.get_bind_group_layout(0);
         let mut first = 0;
         while first < spp {

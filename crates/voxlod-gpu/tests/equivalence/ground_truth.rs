@@ -191,3 +191,44 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
     }
     Ok(Measure { max_error: worst.get(), bound, pass: result.is_ok(), note })
 }
+
+/// The sample ranges of the dispatches do not change the image: cornell at 24×20, 20 rays per
+/// pixel, in one dispatch and in dispatches of 3 samples (7 dispatches, the last short) must
+/// agree **bit for bit** (the same samples added in the same order). On the CPU row, the CPU
+/// render against itself with another seed must differ (the comparison can fail).
+pub fn dispatch_split(backend: &Backend) -> Result<Measure, String> {
+    let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
+    let g = scene.geometry();
+    let bvh = Bvh::new(&g).map_err(|e| e.to_string())?;
+    let camera = scene.default_camera().map_err(|e| e.to_string())?;
+    let options = Options { width: 24, height: 20, spp: 20, ..Options::default() };
+    let (a, b, expect_equal) = match backend {
+        Backend::Cpu => {
+            let a = render(&scene, &g, &bvh, &camera, &options).map_err(|e| e.to_string())?;
+            let other = Options { seed: 1, ..options };
+            let b = render(&scene, &g, &bvh, &camera, &other).map_err(|e| e.to_string())?;
+            (a.image, b.image, false)
+        }
+        Backend::Gpu(ctx) => {
+            let one = GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?;
+            let split = GroundTruthKernel::new(ctx)
+                .map_err(|e| e.to_string())?
+                .with_rays_per_dispatch(24 * 20 * 3);
+            let up = one.upload(&scene, &g, &bvh).map_err(|e| e.to_string())?;
+            let a = one.render(&up, &camera, &options).map_err(|e| e.to_string())?;
+            let b = split.render(&up, &camera, &options).map_err(|e| e.to_string())?;
+            (a, b, true)
+        }
+    };
+    let differing = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p != q).count();
+    let pass = (differing == 0) == expect_equal;
+    let note = if expect_equal {
+        format!("1 dispatch vs 7: {differing} of {} pixels differ (bound 0)", a.pixels.len())
+    } else {
+        format!(
+            "control (no dispatches on the CPU): seed 0 vs seed 1 must differ, and {differing} of {} pixels do",
+            a.pixels.len()
+        )
+    };
+    Ok(Measure { max_error: differing as f64, bound: 0.0, pass, note })
+}

@@ -41,6 +41,7 @@ fn equivalence_suite() {
         suite.run("random (exact)", backend, random::exact);
         suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
         suite.run("ground truth (proptest)", backend, ground_truth::property);
+        suite.run("ground truth (dispatches)", backend, ground_truth::dispatch_split);
     }
     suite.finish();
 }
