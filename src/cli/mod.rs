@@ -130,7 +130,7 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output (CPU backend).
+    /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output.
     #[arg(long)]
     pub gbuffer: bool,
     /// Where to render (gpu: opaque untextured materials; equal to the CPU's image within the

@@ -3,14 +3,14 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use glam::Vec3;
 use voxlod::cpu::raycast::Bvh;
 use voxlod::cpu::render::ground_truth::{self, GBuffer, GTexel};
 use voxlod::scene::{Image, Srgb8Image};
 
 use super::{Ui, backend, load_scene, print_json};
-use crate::cli::{BackendArg, RenderArgs, parse};
+use crate::cli::{RenderArgs, parse};
 
 #[derive(serde::Serialize)]
 struct Summary {
@@ -30,11 +30,6 @@ struct Summary {
 /// Renders the ground truth of a scene.
 pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
     let (width, height) = parse::size(&args.size)?;
-    if args.gbuffer && args.backend == BackendArg::Gpu {
-        bail!(
-            "--gbuffer is not available with --backend gpu (the GPU kernel renders the image only)"
-        );
-    }
     let (gpu, backend_name) = backend(args.backend)?;
     let spinner = ui.spinner();
     spinner.set_message(format!("loading {}", args.scene));
@@ -60,25 +55,27 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         ambient: Vec3::splat(0.1),
         shadows: true,
     };
-    let (image, gbuffer, render_seconds) = match &gpu {
+    let (out, render_seconds) = match &gpu {
         None => {
             let t = Instant::now();
             let out = ground_truth::render(&scene, &geometry, &bvh, &camera, &options)?;
-            (out.image, Some(out.gbuffer), t.elapsed().as_secs_f64())
+            (out, t.elapsed().as_secs_f64())
         }
         Some(ctx) => {
             // Upload (and kernel compilation) outside the timed render, like the BVH build.
             let kernel = voxlod::gpu::ground_truth::GroundTruthKernel::new(ctx)?;
             let uploaded = kernel.upload(&scene, &geometry, &bvh)?;
             let t = Instant::now();
-            let image = kernel.render(&uploaded, &camera, &options)?;
-            (image, None, t.elapsed().as_secs_f64())
+            let out = kernel.render(&uploaded, &camera, &options)?;
+            (out, t.elapsed().as_secs_f64())
         }
     };
     spinner.set_message(format!("writing {}", args.output.display()));
-    image.save_png(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
-    if let (true, Some(gbuffer)) = (args.gbuffer, &gbuffer) {
-        write_gbuffer(gbuffer, &args.output)?;
+    out.image
+        .save_png(&args.output)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    if args.gbuffer {
+        write_gbuffer(&out.gbuffer, &args.output)?;
     }
     spinner.finish_and_clear();
     let rays = width as f64 * height as f64 * args.spp as f64;

@@ -12,8 +12,8 @@
 //!   `Bvh::intersect` in a loop on one thread; GPU with the BVH already uploaded.
 //!
 //! - `ground_truth`: the cornell box, 128×128 at 16 rays per pixel with shadows; CPU reference
-//!   `voxlod_cpu::render::ground_truth::render` (rayon, all cores; it also fills a G-buffer,
-//!   one extra ray per pixel); GPU with the scene already uploaded.
+//!   `voxlod_cpu::render::ground_truth::render` (rayon, all cores); both also fill the
+//!   pixel-centre G-buffer (one extra ray per pixel); GPU with the scene already uploaded.
 //!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 

@@ -14,7 +14,7 @@ struct Params {
     light_a: vec4<f32>,      // directional: unit to_light; point: position
     light_b: vec4<f32>,      // directional: irradiance; point: intensity
     size: vec4<u32>,         // width, height, spp, flags (1: shadows, 2: point light)
-    samples: vec4<u32>,      // first sample, end sample, 0, 0
+    samples: vec4<u32>,      // first sample, end sample, 1 to write the G-buffer, 0
     streams: vec4<u32>,      // jitter_x, jitter_y, alpha_primary, alpha_shadow keys
 }
 
@@ -36,6 +36,17 @@ struct Material {
 @group(0) @binding(3) var<storage, read> shade_tris: array<ShadeTri>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read_write> sums: array<vec4<f32>>; // rgb sum, hits
+@group(0) @binding(6) var<storage, read_write> gbuffer: array<GTexel>;
+
+// voxlod-cpu's GTexel: what the ray through the pixel centre sees (coverage is set on the host).
+struct GTexel {
+    position: vec3<f32>,
+    depth: f32,
+    normal: vec3<f32>,
+    coverage: f32,
+    albedo: vec3<f32>,
+    triangle: u32,
+}
 
 const ONE_BELOW: f32 = 0.99999994; // the largest f32 below 1
 
@@ -99,23 +110,20 @@ struct Sample {
     hit: bool,
 }
 
-fn camera_sample(dir: vec3<f32>) -> Sample {
-    var out: Sample;
-    let eye = params.eye.xyz;
-    let h = trace(eye, dir, 0.0, F32_MAX, false);
-    if h.triangle == MISS {
-        out.radiance = params.background.xyz;
-        out.hit = false;
-        return out;
-    }
-    out.hit = true;
-    // The surface point (surface.rs `surface`).
+struct Surface {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+}
+
+// The surface point of hit `h` seen along `dir` (surface.rs `surface`).
+fn surface(h: Hit, dir: vec3<f32>) -> Surface {
     let t = shade_tris[h.triangle];
     let a = t.p0.xyz;
     let b = t.p1.xyz;
     let c = t.p2.xyz;
     let w = 1.0 - h.u - h.v;
-    let position = a * w + b * h.u + c * h.v;
+    var out: Surface;
+    out.position = a * w + b * h.u + c * h.v;
     var normal = normalize_or_zero(t.n0.xyz * w + t.n1.xyz * h.u + t.n2.xyz * h.v);
     if all(normal == vec3<f32>(0.0)) {
         normal = normalize_or_zero(cross(b - a, c - a));
@@ -127,6 +135,43 @@ fn camera_sample(dir: vec3<f32>) -> Sample {
     if mat.albedo.w != 0.0 && dot(cross(b - a, c - a), dir) > 0.0 {
         normal = -normal;
     }
+    out.normal = normal;
+    return out;
+}
+
+fn centre_texel(dir: vec3<f32>) -> GTexel {
+    var g: GTexel;
+    let h = trace(params.eye.xyz, dir, 0.0, F32_MAX, false);
+    if h.triangle == MISS {
+        g.depth = bitcast<f32>(0x7f800000u); // +inf, as the CPU writes
+        g.triangle = MISS;
+        return g;
+    }
+    let s = surface(h, dir);
+    g.position = s.position;
+    g.depth = h.t;
+    g.normal = s.normal;
+    g.coverage = 1.0;
+    g.albedo = materials[bitcast<u32>(shade_tris[h.triangle].p0.w)].albedo.xyz;
+    g.triangle = h.triangle;
+    return g;
+}
+
+fn camera_sample(dir: vec3<f32>) -> Sample {
+    var out: Sample;
+    let eye = params.eye.xyz;
+    let h = trace(eye, dir, 0.0, F32_MAX, false);
+    if h.triangle == MISS {
+        out.radiance = params.background.xyz;
+        out.hit = false;
+        return out;
+    }
+    out.hit = true;
+    let t = shade_tris[h.triangle];
+    let sp = surface(h, dir);
+    let position = sp.position;
+    let normal = sp.normal;
+    let mat = materials[bitcast<u32>(t.p0.w)];
     // The light seen from the point (Light::sample).
     var light: LightSample;
     let point_light = (params.size.w & 2u) != 0u;
@@ -183,4 +228,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         hits += select(0.0, 1.0, r.hit);
     }
     sums[pixel] = vec4<f32>(sum, hits);
+    if params.samples.z == 1u {
+        gbuffer[pixel] = centre_texel(ray_dir(corner + vec2<f32>(0.5)));
+    }
 }

@@ -13,8 +13,9 @@
 //! and point lights, shadows, ambient: every material of the builtin scenes except the
 //! alpha-masked textured leaves of `forest` (`alpha=false` gives its untextured leaves). A
 //! scene with a base-colour texture or an alpha mode other than opaque is refused with
-//! [`Error::Unsupported`], never rendered differently. The G-buffer of the CPU renderer is not
-//! produced (the image only).
+//! [`Error::Unsupported`], never rendered differently. The pixel-centre G-buffer is produced
+//! as on the CPU (voxlod-cpu's [`GTexel`], the same `#[repr(C)]` type, mirrored in WGSL), by
+//! the last dispatch.
 //!
 //! # Kernel (what a real GPU sees)
 //! One invocation per pixel in 8×8 workgroups: neighbouring camera rays are coherent, so they
@@ -34,7 +35,9 @@
 
 use glam::{Vec3, Vec4};
 use voxlod_cpu::raycast::Bvh;
-use voxlod_cpu::render::ground_truth::{Options, check_options, validate};
+use voxlod_cpu::render::ground_truth::{
+    GBuffer, GTexel, GroundTruth, Options, check_options, validate,
+};
 use voxlod_cpu::render::sampling::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
@@ -206,10 +209,16 @@ impl<'a> GroundTruthKernel<'a> {
         })
     }
 
-    /// Renders the uploaded scene from `camera`: the image of
-    /// [`voxlod_cpu::render::ground_truth::render`] (linear RGB with the background composited,
-    /// alpha = coverage), with the same errors for bad options or camera.
-    pub fn render(&self, scene: &GpuScene, camera: &Camera, options: &Options) -> Result<Image> {
+    /// Renders the uploaded scene from `camera`: what
+    /// [`voxlod_cpu::render::ground_truth::render`] returns (linear RGB with the background
+    /// composited, alpha = coverage, and the pixel-centre G-buffer), with the same errors for
+    /// bad options or camera.
+    pub fn render(
+        &self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &Options,
+    ) -> Result<GroundTruth> {
         let ctx = self.ctx;
         let Options { width, height, spp, seed, ambient, shadows } = *options;
         // Only the option and camera checks can fail here: the scene was checked on upload.
@@ -228,6 +237,8 @@ impl<'a> GroundTruthKernel<'a> {
         }
         let bytes = pixels * 16;
         let sums = ctx.storage_zeroed("ground-truth sums", bytes)?;
+        let texel_bytes = pixels * size_of::<GTexel>() as u64;
+        let gbuffer = ctx.storage_zeroed("ground-truth G-buffer", texel_bytes)?;
         let (point, la, lb) = match scene.light {
             Light::Directional { to_light, irradiance } => (false, to_light, irradiance),
             Light::Point { position, intensity } => (true, position, intensity),
@@ -248,7 +259,7 @@ impl<'a> GroundTruthKernel<'a> {
                 light_a: la.extend(0.0).to_array(),
                 light_b: lb.extend(0.0).to_array(),
                 size: [width, height, spp, flags],
-                samples: [first, end, 0, 0],
+                samples: [first, end, u32::from(end == spp), 0],
                 streams: [
                     streams.jitter_x,
                     streams.jitter_y,
@@ -268,6 +279,7 @@ impl<'a> GroundTruthKernel<'a> {
                         entry(3, &scene.shade_tris),
                         entry(4, &scene.materials),
                         entry(5, &sums),
+                        entry(6, &gbuffer),
                     ],
                 })
             })?;
@@ -288,7 +300,15 @@ impl<'a> GroundTruthKernel<'a> {
             .iter()
             .map(|s| (Vec3::new(s[0], s[1], s[2]) / spp as f32).extend(s[3] / spp as f32))
             .collect::<Vec<Vec4>>();
-        Ok(Image { width, height, pixels })
+        let raw = ctx.read(&gbuffer, texel_bytes)?;
+        let mut texels: Vec<GTexel> = bytemuck::pod_collect_to_vec(&raw);
+        for (t, p) in texels.iter_mut().zip(&pixels) {
+            t.coverage = p.w;
+        }
+        Ok(GroundTruth {
+            image: Image { width, height, pixels },
+            gbuffer: GBuffer { width, height, texels },
+        })
     }
 }
 
@@ -338,6 +358,19 @@ mod tests {
                 ("n0", offset_of!(GpuShadeTri, n0)),
                 ("n1", offset_of!(GpuShadeTri, n1)),
                 ("n2", offset_of!(GpuShadeTri, n2)),
+            ],
+        );
+        assert_mirrors(
+            WGSL,
+            "GTexel",
+            size_of::<GTexel>(),
+            &[
+                ("position", offset_of!(GTexel, position)),
+                ("depth", offset_of!(GTexel, depth)),
+                ("normal", offset_of!(GTexel, normal)),
+                ("coverage", offset_of!(GTexel, coverage)),
+                ("albedo", offset_of!(GTexel, albedo)),
+                ("triangle", offset_of!(GTexel, triangle)),
             ],
         );
         assert_mirrors(

@@ -15,9 +15,9 @@
 //!   see the table's note); 2 % of the pixels leaves room for other adapters' rounding.
 
 use voxlod_cpu::raycast::Bvh;
-use voxlod_cpu::render::ground_truth::{Options, render};
+use voxlod_cpu::render::ground_truth::{GBuffer, GroundTruth, Options, render};
 use voxlod_gpu::ground_truth::GroundTruthKernel;
-use voxlod_scene::{Image, Scene};
+use voxlod_scene::Scene;
 
 use crate::harness::{Backend, Measure};
 use crate::images::{ImageBound, compare};
@@ -46,12 +46,43 @@ fn scenes() -> Vec<(&'static str, Scene, Options)> {
     ]
 }
 
-fn cpu(scene: &Scene, options: &Options) -> Result<Image, String> {
+fn cpu(scene: &Scene, options: &Options) -> Result<GroundTruth, String> {
     let g = scene.geometry();
     let bvh = Bvh::new(&g).map_err(|e| e.to_string())?;
     let camera = scene.default_camera().map_err(|e| e.to_string())?;
-    Ok(render(scene, &g, &bvh, &camera, options).map_err(|e| e.to_string())?.image)
+    render(scene, &g, &bvh, &camera, options).map_err(|e| e.to_string())
 }
+
+/// G-buffer texels: the same triangle at the pixel centre except near ties (at most
+/// [`GBUFFER_TIES`] of the pixels, where the centre ray passes within float rounding of an
+/// edge), and where the triangle agrees, depth and position within 1e-4 relative (the `t`
+/// bound of the raycast kernel), normal and albedo within 1e-4, coverage exactly the image's
+/// alpha. Returns `(differing triangles, max error)`.
+fn compare_gbuffer(a: &GBuffer, e: &GBuffer) -> (usize, f64) {
+    let mut ties = 0;
+    let mut worst = 0.0f64;
+    for (p, q) in a.texels.iter().zip(&e.texels) {
+        if p.triangle != q.triangle {
+            ties += 1;
+            continue;
+        }
+        if p.triangle == u32::MAX {
+            worst = worst.max(if p.depth == q.depth { 0.0 } else { f64::INFINITY });
+            continue;
+        }
+        let rel = |x: f32, y: f32| ((x - y).abs() / y.abs().max(1e-6)) as f64;
+        worst = worst
+            .max(rel(p.depth, q.depth))
+            .max(((p.position - q.position).length() / q.position.length().max(1e-6)) as f64)
+            .max((p.normal - q.normal).abs().max_element() as f64)
+            .max((p.albedo - q.albedo).abs().max_element() as f64)
+            .max((p.coverage - q.coverage).abs() as f64);
+    }
+    (ties, worst)
+}
+
+const GBUFFER_TIES: f64 = 0.01;
+const GBUFFER_BOUND: f64 = 1e-4;
 
 pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
     let kernel = match backend {
@@ -68,7 +99,12 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
                     .build()
                     .map_err(|e| e.to_string())?;
                 let one = pool.install(|| cpu(&scene, &options))?;
-                compare(name, &one, &expected, EXACT)
+                let mut m = compare(name, &one.image, &expected.image, EXACT);
+                if one.gbuffer != expected.gbuffer {
+                    m.pass = false;
+                    m.note += "; the G-buffer differs with one thread";
+                }
+                m
             }
             Some(k) => {
                 let g = scene.geometry();
@@ -79,8 +115,18 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
                 let actual = k.render(&gpu, &camera, &options).map_err(|e| e.to_string())?;
                 let seconds = start.elapsed().as_secs_f64();
                 let slug = format!("{name}-{}", backend_slug(backend));
-                let mut m = compare(&slug, &actual, &expected, GPU_BOUND);
-                m.note += &format!(", {} triangles, {seconds:.2} s", g.triangle_count());
+                let mut m = compare(&slug, &actual.image, &expected.image, GPU_BOUND);
+                let (ties, worst) = compare_gbuffer(&actual.gbuffer, &expected.gbuffer);
+                let n = actual.gbuffer.texels.len();
+                if ties as f64 > GBUFFER_TIES * n as f64 || worst > GBUFFER_BOUND {
+                    m.pass = false;
+                }
+                m.note += &format!(
+                    ", G-buffer: {ties} of {n} centre triangles differ (allowed {:.0} %), max \
+                     error {worst:.2e} (bound {GBUFFER_BOUND:.0e}), {} triangles, {seconds:.2} s",
+                    100.0 * GBUFFER_TIES,
+                    g.triangle_count()
+                );
                 m
             }
         };
@@ -165,7 +211,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
             Some(k) => {
                 let actual = k.render(&uploaded[which], &camera, &options);
                 let actual = actual.map_err(|e| TestCaseError::fail(e.to_string()))?;
-                compare("gt-property-gpu", &actual, &expected, GPU_BOUND)
+                compare("gt-property-gpu", &actual.image, &expected, GPU_BOUND)
             }
         };
         count.set(count.get() + 1);
@@ -217,7 +263,10 @@ pub fn dispatch_split(backend: &Backend) -> Result<Measure, String> {
             let up = one.upload(&scene, &g, &bvh).map_err(|e| e.to_string())?;
             let a = one.render(&up, &camera, &options).map_err(|e| e.to_string())?;
             let b = split.render(&up, &camera, &options).map_err(|e| e.to_string())?;
-            (a, b, true)
+            if a.gbuffer != b.gbuffer {
+                return Err("the G-buffer depends on the dispatch split".into());
+            }
+            (a.image, b.image, true)
         }
     };
     let differing = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p != q).count();
