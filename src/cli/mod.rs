@@ -63,6 +63,16 @@ impl Default for ReportArgs {
     }
 }
 
+/// Where a command's kernel runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU reference (rayon).
+    Cpu,
+    /// The wgpu backend on the adapter `VOXLOD_ADAPTER` selects (default: a discrete GPU
+    /// first); no adapter is an error, never a silent fall-back to the CPU.
+    Gpu,
+}
+
 /// Voxelization mode.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum ModeArg {
@@ -85,6 +95,9 @@ pub struct VoxelizeArgs {
     /// Which voxels to set.
     #[arg(long, value_enum, default_value_t = ModeArg::Conservative)]
     pub mode: ModeArg,
+    /// Where to voxelize (gpu: conservative and thin modes; the same voxels as the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Output file: .vxl (voxlod container) or .binvox.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -120,6 +133,10 @@ pub struct RenderArgs {
     /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output.
     #[arg(long)]
     pub gbuffer: bool,
+    /// Where to render (gpu: opaque untextured materials; equal to the CPU's image within the
+    /// equivalence suite's bound).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,

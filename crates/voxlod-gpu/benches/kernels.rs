@@ -11,7 +11,11 @@
 //! - `raycast`: 256×256 primary rays on the bunny, framing view; CPU reference
 //!   `Bvh::intersect` in a loop on one thread; GPU with the BVH already uploaded.
 //!
-//! `cargo bench -p voxlod-gpu --bench kernels`
+//! - `ground_truth`: the cornell box, 128×128 at 16 rays per pixel with shadows; CPU reference
+//!   `voxlod_cpu::render::ground_truth::render` (rayon, all cores); both also fill the
+//!   pixel-centre G-buffer (one extra ray per pixel); GPU with the scene already uploaded.
+//!
+//! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
 use std::hint::black_box;
 use std::path::Path;
@@ -110,5 +114,30 @@ fn raycast(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, voxelize, raycast);
+fn ground_truth(c: &mut Criterion) {
+    use voxlod_cpu::render::ground_truth::{Options, render};
+    use voxlod_gpu::ground_truth::GroundTruthKernel;
+    let ctx = context();
+    let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
+    let g = scene.geometry();
+    let bvh = Bvh::new(&g).unwrap();
+    let camera = scene.default_camera().unwrap();
+    let options = Options { width: 128, height: 128, spp: 16, ..Options::default() };
+    let mut group = c.benchmark_group("ground_truth_128x128_16spp");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(128 * 128 * 16));
+    group.bench_function("cornell/cpu", |b| {
+        b.iter(|| black_box(render(&scene, &g, &bvh, &camera, &options).unwrap()))
+    });
+    if let Some(ctx) = &ctx {
+        let kernel = GroundTruthKernel::new(ctx).unwrap();
+        let gpu = kernel.upload(&scene, &g, &bvh).unwrap();
+        group.bench_function("cornell/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&gpu, &camera, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, voxelize, raycast, ground_truth);
 criterion_main!(benches);
