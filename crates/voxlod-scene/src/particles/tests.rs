@@ -83,7 +83,13 @@ fn cube_map_is_continuous_bounded_and_consistent_with_its_texels() {
         assert!((0.0..=1.0).contains(&v), "{v} at {d}");
         assert!((v - map.sample(d * 3.7)).abs() < 1e-5, "length does not matter");
         spread = (spread.0.min(v), spread.1.max(v));
-        // Nearby directions within one face read nearby values.
+        // Nearby directions within one face (away from its edges: faces are not filtered
+        // across) read nearby values.
+        let mut c = d.abs().to_array();
+        c.sort_by(f32::total_cmp);
+        if c[2] - c[1] < 1e-2 {
+            continue;
+        }
         let e = map.sample((d + Vec3::splat(1e-4)).normalize());
         assert!((e - v).abs() < 0.05, "jump {v} → {e} at {d}");
     }
