@@ -32,7 +32,8 @@ fn layouts_are_what_a_gpu_reads() {
 
 #[test]
 fn bad_fields_name_the_particle_and_the_field() {
-    let cases: [(&str, fn(&mut Particle)); 6] = [
+    type Spoil = fn(&mut Particle);
+    let cases: [(&str, Spoil); 6] = [
         ("radius", |p| p.radius = -1.0),
         ("center", |p| p.center.y = f32::NAN),
         ("density", |p| p.density = f32::INFINITY),
