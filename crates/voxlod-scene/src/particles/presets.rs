@@ -126,7 +126,7 @@ pub fn smoke_column(p: &SmokeParams) -> Result<ParticleSystem> {
                 color: Vec3::splat(grey),
                 density: p.density * rng.range(0.5, 1.0),
                 color_outer: Vec3::splat(grey),
-                growth: rng.range(0.8, 1.4),
+                growth: rng.range(0.3, 0.6),
                 birth,
                 lifetime: p.lifetime,
                 spin: rng.next_f32(),
