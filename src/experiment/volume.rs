@@ -201,7 +201,7 @@ pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResul
         })
     };
     for &m in &config.metavoxel_sizes {
-        if m == 0 || config.resolution % m != 0 || config.resolution / m > 128 {
+        if m == 0 || !config.resolution.is_multiple_of(m) || config.resolution / m > 128 {
             return Err(bad(
                 "metavoxel size",
                 m.to_string(),
