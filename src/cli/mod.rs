@@ -38,6 +38,10 @@ pub enum Command {
     Compare(CompareSceneArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
+    /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
+    /// with metavoxels, and measure its trade: attenuation models against the exact reference,
+    /// time and memory per metavoxel size.
+    Volume(VolumeArgs),
     /// List the builtin scenes and their parameters.
     Scenes,
 }
@@ -167,6 +171,34 @@ pub struct CompareSceneArgs {
     pub thresholds: Vec<f32>,
     /// Output directory.
     #[arg(short, long, default_value = "out/compare")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod volume`.
+#[derive(Debug, Args)]
+pub struct VolumeArgs {
+    /// Preset: smoke, explosion or clouds.
+    pub preset: String,
+    /// Particles (0: the preset's default: smoke 10000, explosion 4000, clouds 3000).
+    #[arg(long, default_value_t = 0)]
+    pub particles: usize,
+    /// Voxels per axis of the volume; every metavoxel size must divide it.
+    #[arg(long, default_value_t = 128)]
+    pub res: u32,
+    /// Metavoxel sizes M measured, comma-separated.
+    #[arg(long, default_value = "8,16,32,64", value_delimiter = ',')]
+    pub m: Vec<u32>,
+    /// Image side in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub image: u32,
+    /// Rays per pixel of the mesh's ground truth.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/volume")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]

@@ -5,6 +5,7 @@ mod compare;
 mod info;
 mod render;
 mod report;
+mod volume;
 mod voxelize;
 
 use std::path::Path;
@@ -17,6 +18,7 @@ pub use compare::compare;
 pub use info::info;
 pub use render::render;
 pub use report::report;
+pub use volume::volume;
 pub use voxelize::voxelize;
 
 use crate::cli::{BackendArg, CompareArgs};

@@ -3,3 +3,4 @@
 mod cli;
 mod experiment;
 mod scene_files;
+mod volume;
