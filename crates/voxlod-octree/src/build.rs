@@ -115,7 +115,7 @@ impl<P: Payload> Octree<P> {
             return Err(Error::TooManyNodes { level: 0, nodes: voxels.len() as u64 });
         }
         let voxel_count = voxels.len() as u64;
-        let (codes, payload) = voxels.into_par_iter().unzip();
+        let (codes, payload) = voxels.into_iter().unzip();
         let mut occupied = vec![Occupied { codes, payload, mask: Vec::new(), first: Vec::new() }];
         for l in 1..=depth as usize {
             let next = coarsen(&occupied[l - 1]);
@@ -234,7 +234,10 @@ fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
     let c = &level.codes;
     let starts: Vec<u32> =
         (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).map(|i| i as u32).collect();
-    let ((codes, payload), mask) = (0..starts.len())
+    let codes = starts.par_iter().with_min_len(MIN_LEN).map(|&s| c[s as usize] >> 3).collect();
+    // Exact-length outputs (an indexed unzip), not vectors grown chunk by chunk.
+    let (mut payload, mut mask) = (Vec::new(), Vec::new());
+    (0..starts.len())
         .into_par_iter()
         .with_min_len(MIN_LEN)
         .map(|g| {
@@ -245,9 +248,9 @@ fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
                 children[(c[i] & 7) as usize] = level.payload[i];
                 mask |= 1 << (c[i] & 7);
             }
-            ((c[starts[g] as usize] >> 3, P::prefilter(&children)), mask)
+            (P::prefilter(&children), mask)
         })
-        .unzip();
+        .unzip_into_vecs(&mut payload, &mut mask);
     Occupied { codes, payload, mask, first: starts }
 }
 
