@@ -1,0 +1,468 @@
+//! The CPU reference build, bottom-up from Morton-sorted voxels, then top-down level by level.
+//! Every step is linear in the nodes it touches: no sort, no hash map, no search (rayon over the
+//! nodes of each step):
+//! 1. **Input check**: coordinates inside the grid, strictly increasing Morton codes (no
+//!    duplicate), every payload accepted by [`Payload::check`].
+//! 2. **Occupied levels, bottom-up**: the occupied nodes of level `l+1` are the distinct codes
+//!    `c >> 3` of level `l`; each one's payload is [`Payload::prefilter`] of its (up to) eight
+//!    occupied children, the others counting as empty, and it records its children's mask and
+//!    the index of its first occupied child. Sorted input stays sorted at every level.
+//! 3. **Sparse levels, top-down**, each from the finished level above it (`octree` module docs
+//!    for the node set):
+//!    - *tiles*: a node `q` of level `l+1` gets a 2×2×2 tile of children iff it is the parent of
+//!      a backward neighbour of an occupied child of some occupied `q + d`, `d ∈ {0,1}³`; that
+//!      is the case iff `d` is a subset of the axes along which one of `q + d`'s occupied children
+//!      lies in the lower half (`SHIFTS`). On the dense level the occupied nodes mark their
+//!      `q − d` directly (Morton decrement); on a sparse level every node reads its seven forward
+//!      corners through the level's links, as the sampler does. Marked nodes, in storage order,
+//!      are the tiles in Morton order: tile `t` starts at node `8t`;
+//!    - *payloads*: tile `t`'s occupied children are a run of the occupied list, found through the
+//!      parent's first-child index and mask (no search);
+//!    - *links*: per tile, the +a neighbour tile is the child tile of the parent's +a neighbour
+//!      (through the parent level's links, or a Morton increment on the dense level); child `k`'s
+//!      +a neighbour is `k | bit` in its own tile when `k`'s a-bit is 0, else child `k & !bit` of
+//!      the neighbour tile. It finds every existing neighbour because a tile exists exactly when
+//!      its parent is a node of the closure.
+//!
+//! The first build (sorted closure parents, per-node link search of the parents) is kept in
+//! `reference` (test builds), and a test asserts both build identical octrees.
+//!
+//! Debug builds then run [`Octree::validate`] and return its error.
+
+use glam::UVec3;
+use rayon::prelude::*;
+use voxlod_format::{BrickMap, GridSpec, morton};
+
+use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
+use crate::payload::Payload;
+use crate::{Error, Result};
+
+#[cfg(test)]
+pub(crate) mod reference;
+
+/// Items per rayon task below which splitting does not pay.
+const MIN_LEN: usize = 2048;
+
+/// Occupied nodes of one level: sorted Morton codes and their payloads.
+struct Occupied<P> {
+    codes: Vec<u64>,
+    payload: Vec<P>,
+    /// Per node (above level 0): bit `k` set if child `k` is occupied.
+    mask: Vec<u8>,
+    /// Per node (above level 0): index of its first occupied child in the level below.
+    first: Vec<u32>,
+}
+
+impl<P: Payload> Octree<P> {
+    /// Builds an octree over `grid` from `(voxel, payload)` pairs in any order (sorted here).
+    /// A voxel outside `grid.dims`, given twice, or with a payload [`Payload::check`] rejects is
+    /// an error naming it.
+    ///
+    /// ```
+    /// use glam::{DVec3, UVec3, Vec3};
+    /// use voxlod_format::GridSpec;
+    /// use voxlod_octree::{AveragePayload, BuildOptions, Octree};
+    /// let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(8)).unwrap();
+    /// let red = AveragePayload::new(Vec3::X, Vec3::Y, 1.0);
+    /// let tree = Octree::build(grid, [(UVec3::new(7, 7, 7), red)], &BuildOptions::default())
+    ///     .unwrap();
+    /// assert_eq!(tree.depth(), 3);
+    /// let bad = AveragePayload::new(Vec3::X, Vec3::Y, f32::NAN);
+    /// let err = Octree::build(grid, [(UVec3::new(1, 2, 3), bad)], &BuildOptions::default());
+    /// assert!(err.unwrap_err().to_string().contains("[1, 2, 3]"));
+    /// ```
+    pub fn build(
+        grid: GridSpec,
+        voxels: impl IntoIterator<Item = (UVec3, P)>,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        let dims = grid.dims;
+        let mut keyed = Vec::new();
+        for (c, p) in voxels {
+            if !c.cmplt(dims).all() {
+                return Err(Error::OutOfBounds { coord: c, dims });
+            }
+            keyed.push((morton::encode(c), p));
+        }
+        keyed.par_sort_unstable_by_key(|k| k.0);
+        Self::from_morton_sorted(grid, keyed, options)
+    }
+
+    /// Builds an octree from the records of a brick map (iterated in Morton order, so nothing
+    /// is sorted), converting each record with `to_payload` (e.g.
+    /// [`crate::AveragePayload::from_record`]). The map must fit in `grid`.
+    pub fn from_brick_map<R>(
+        grid: GridSpec,
+        map: &BrickMap<R>,
+        to_payload: impl Fn(&R) -> P,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        let voxels = map.iter().map(|(c, r)| (morton::encode(c), to_payload(r))).collect();
+        Self::from_morton_sorted(grid, voxels, options)
+    }
+
+    /// Builds an octree from `(Morton code, payload)` pairs in strictly increasing code order.
+    /// Out-of-order or repeated codes, voxels outside the grid and rejected payloads are errors.
+    pub fn from_morton_sorted(
+        grid: GridSpec,
+        voxels: Vec<(u64, P)>,
+        options: &BuildOptions,
+    ) -> Result<Self> {
+        grid.validate()?;
+        let (depth, first_dense) = plan(grid.dims, options)?;
+        check_input(grid.dims, &voxels)?;
+        if voxels.len() as u64 >= NONE as u64 {
+            return Err(Error::TooManyNodes { level: 0, nodes: voxels.len() as u64 });
+        }
+        let voxel_count = voxels.len() as u64;
+        let (codes, payload) = voxels.into_iter().unzip();
+        let mut occupied = vec![Occupied { codes, payload, mask: Vec::new(), first: Vec::new() }];
+        for l in 1..=depth as usize {
+            let next = coarsen(&occupied[l - 1]);
+            occupied.push(next);
+        }
+        let fd = first_dense as usize;
+        let mut levels: Vec<Level<P>> = (0..=depth as usize)
+            .into_par_iter()
+            .map(|l| {
+                let res_log2 = depth - l as u32;
+                if l >= fd {
+                    dense_level(res_log2, &occupied[l])
+                } else {
+                    let empty = Vec::new();
+                    Level {
+                        res_log2,
+                        dense: false,
+                        payload: empty,
+                        child: Vec::new(),
+                        mask: Vec::new(),
+                        links: Vec::new(),
+                    }
+                }
+            })
+            .collect();
+        // Occupied index per node of the level above the one being built (NONE: unoccupied).
+        let mut occ_above =
+            if fd >= 1 { dense_occupancy(&levels[fd], &occupied[fd]) } else { vec![] };
+        for l in (0..fd).rev() {
+            let (lower, upper) = levels.split_at_mut(l + 1);
+            let (level, parent) = (&mut lower[l], &mut upper[0]);
+            let (occ, occ_parent) = (&occupied[l], &occupied[l + 1]);
+            let tiles = if parent.dense {
+                dense_tile_parents(parent, occ_parent)
+            } else {
+                sparse_tile_parents(parent, &occ_above, occ_parent)
+            };
+            let nodes = 8 * tiles.len() as u64;
+            if nodes >= NONE as u64 {
+                return Err(Error::TooManyNodes { level: l as u32, nodes });
+            }
+            parent.child = vec![NONE; parent.payload.len()];
+            for (rank, &p) in tiles.iter().enumerate() {
+                parent.child[p as usize] = 8 * rank as u32;
+            }
+            parent.mask = occ_above
+                .par_iter()
+                .with_min_len(MIN_LEN)
+                .map(|&g| if g == NONE { 0 } else { occ_parent.mask[g as usize] })
+                .collect();
+            let (payload, occ_here) = fill_tiles(&tiles, &occ_above, occ_parent, occ, l > 0);
+            level.payload = payload;
+            level.links = links(&tiles, parent);
+            occ_above = occ_here;
+        }
+        let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
+        if cfg!(debug_assertions) {
+            tree.validate()?;
+        }
+        Ok(tree)
+    }
+}
+
+/// Depth and finest dense level for a grid.
+pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
+    let needed = dims.max_element().next_power_of_two().trailing_zeros();
+    let depth = options.depth.unwrap_or(needed);
+    if depth > MAX_DEPTH {
+        return Err(Error::TooDeep { requested: depth, max: MAX_DEPTH });
+    }
+    if depth < needed {
+        return Err(Error::GridDoesNotFit { dims, depth, res: 1 << depth });
+    }
+    if options.dense_log2 > MAX_DENSE_LOG2 {
+        return Err(Error::DenseTooLarge {
+            requested_log2: options.dense_log2,
+            res: 1u64 << options.dense_log2.min(63),
+            max_log2: MAX_DENSE_LOG2,
+        });
+    }
+    Ok((depth, depth - options.dense_log2.min(depth)))
+}
+
+/// Checks the input, so the error names the first bad voxel.
+fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
+    let problem = |i: usize| -> Option<Error> {
+        let (code, ref p) = voxels[i];
+        let coord = morton::decode(code);
+        if code >> 63 != 0 || !coord.cmplt(dims).all() {
+            return Some(Error::OutOfBounds { coord, dims });
+        }
+        if i > 0 {
+            let prev = voxels[i - 1].0;
+            if prev == code {
+                return Some(Error::DuplicateVoxel { coord });
+            }
+            if prev > code {
+                return Some(Error::OutOfOrder { coord, code });
+            }
+        }
+        p.check().map(|reason| Error::InvalidPayload { coord, reason })
+    };
+    let first_bad = (0..voxels.len())
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .find_first(|&i| problem(i).is_some());
+    match first_bad.and_then(problem) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// The occupied nodes one level up: distinct parents, each the prefilter of its children, with
+/// their children's mask and first index.
+fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
+    let c = &level.codes;
+    let starts: Vec<u32> =
+        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).map(|i| i as u32).collect();
+    let codes = starts.par_iter().with_min_len(MIN_LEN).map(|&s| c[s as usize] >> 3).collect();
+    // Exact-length outputs (an indexed unzip), not vectors grown chunk by chunk.
+    let (mut payload, mut mask) = (Vec::new(), Vec::new());
+    (0..starts.len())
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .map(|g| {
+            let end = starts.get(g + 1).map_or(c.len(), |&e| e as usize);
+            let mut children = [P::empty(); 8];
+            let mut mask = 0u8;
+            for i in starts[g] as usize..end {
+                children[(c[i] & 7) as usize] = level.payload[i];
+                mask |= 1 << (c[i] & 7);
+            }
+            (P::prefilter(&children), mask)
+        })
+        .unzip_into_vecs(&mut payload, &mut mask);
+    Occupied { codes, payload, mask, first: starts }
+}
+
+/// `SUBSETS[m]`: bit `d` set for every `d ⊆ m` (3-bit sets).
+const SUBSETS: [u8; 8] = {
+    let mut t = [0u8; 8];
+    let mut m = 0;
+    while m < 8 {
+        let mut d = 0;
+        while d < 8 {
+            if d & !m == 0 {
+                t[m] |= 1 << d;
+            }
+            d += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// `SHIFTS[mask]`: for an occupied node `q` whose occupied children are `mask`, bit `d` set if
+/// `q − d` is the parent of a backward neighbour of one of them. Child `o = 2q + b` has backward
+/// neighbours `o − e` whose parents are `q − d` with `d_a = e_a` where `b_a = 0` and `d_a = 0`
+/// where `b_a = 1`: `d` ranges over the subsets of the axes along which `b` is 0.
+const SHIFTS: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut m = 0;
+    while m < 256 {
+        let mut b = 0;
+        while b < 8 {
+            if m >> b & 1 == 1 {
+                t[m] |= SUBSETS[!b & 7];
+            }
+            b += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// The Morton-code bits of axis `a` (x: bits 0, 3, 6, …).
+const AXIS_BITS: [u64; 3] =
+    [0x1249_2492_4924_9249, 0x1249_2492_4924_9249 << 1, 0x1249_2492_4924_9249 << 2];
+
+/// The code one step down axis `a`, or `None` at coordinate 0. No decode.
+#[inline]
+pub(crate) fn morton_dec(code: u64, a: usize) -> Option<u64> {
+    let m = AXIS_BITS[a];
+    let field = code & m;
+    (field != 0).then_some((field.wrapping_sub(1) & m) | (code & !m))
+}
+
+/// The code one step up axis `a` at resolution `2^res_log2` (≤ 21), or `None` past the edge.
+#[inline]
+pub(crate) fn morton_inc(code: u64, a: usize, res_log2: u32) -> Option<u64> {
+    let m = AXIS_BITS[a];
+    // The field of coordinate `2^res_log2 − 1`: every axis bit below bit 3·res_log2.
+    if code & m == m & ((1u64 << (3 * res_log2)) - 1) {
+        return None;
+    }
+    Some(((code | !m).wrapping_add(1)) & m | (code & !m))
+}
+
+/// A dense level: every payload, indexed by Morton code (child pointers and masks of the
+/// finest dense level are set when the level below is built).
+fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<P>) -> Level<P> {
+    let n = 1usize << (3 * res_log2);
+    let mut payload = vec![P::empty(); n];
+    for (&c, p) in occupied.codes.iter().zip(&occupied.payload) {
+        payload[c as usize] = *p;
+    }
+    Level { res_log2, dense: true, payload, child: Vec::new(), mask: Vec::new(), links: Vec::new() }
+}
+
+/// Occupied index per node of a dense level.
+fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+    let mut occ = vec![NONE; level.payload.len()];
+    for (g, &c) in occupied.codes.iter().enumerate() {
+        occ[c as usize] = g as u32;
+    }
+    occ
+}
+
+/// Tile parents (node indices, ascending) under a dense level: each occupied node `q` marks
+/// `q − d` for `d ∈ SHIFTS[mask]`.
+fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+    let mut marked = vec![false; level.payload.len()];
+    for (&q, &m) in occupied.codes.iter().zip(&occupied.mask) {
+        let s = SHIFTS[m as usize];
+        for d in 0..8usize {
+            if s >> d & 1 == 0 {
+                continue;
+            }
+            let c =
+                (0..3).try_fold(q, |c, a| if d >> a & 1 == 1 { morton_dec(c, a) } else { Some(c) });
+            if let Some(c) = c {
+                marked[c as usize] = true;
+            }
+        }
+    }
+    (0..marked.len() as u32).filter(|&i| marked[i as usize]).collect()
+}
+
+/// Tile parents (node indices, ascending) under a sparse level with links: node `n` is one iff
+/// a corner `n + d` (reached by forward links) is occupied with `d ∈ SHIFTS[its mask]`.
+fn sparse_tile_parents<P: Payload>(
+    level: &Level<P>,
+    occ: &[u32],
+    occupied: &Occupied<P>,
+) -> Vec<u32> {
+    let links = &level.links;
+    let hit = |i: u32, d: u32| {
+        i != NONE && {
+            let g = occ[i as usize];
+            g != NONE && SHIFTS[occupied.mask[g as usize] as usize] >> d & 1 == 1
+        }
+    };
+    let hop = |i: u32, a: usize| if i == NONE { NONE } else { links[i as usize][a] };
+    (0..occ.len() as u32)
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .filter(|&n| {
+            if hit(n, 0) {
+                return true;
+            }
+            let [x, y, z] = links[n as usize];
+            let (xy, xz, yz) = (hop(x, 1), hop(x, 2), hop(y, 2));
+            hit(x, 1)
+                || hit(y, 2)
+                || hit(z, 4)
+                || hit(xy, 3)
+                || hit(xz, 5)
+                || hit(yz, 6)
+                || hit(hop(xy, 2), 7)
+        })
+        .collect()
+}
+
+/// Payloads of the tiles under `tiles` (node indices of the level above, whose occupied index
+/// per node is `occ_above`), and, if `with_occupancy`, the occupied index per node of this level.
+/// Each array is written once, in parallel, without a fill pass.
+fn fill_tiles<P: Payload>(
+    tiles: &[u32],
+    occ_above: &[u32],
+    above: &Occupied<P>,
+    here: &Occupied<P>,
+    with_occupancy: bool,
+) -> (Vec<P>, Vec<u32>) {
+    // Node 8t + k is occupied iff bit k of its parent's mask is; its index in `here` is the
+    // parent's first child plus the occupied siblings before it.
+    let occupied_index = |i: usize| -> u32 {
+        let g = occ_above[tiles[i / 8] as usize];
+        if g == NONE {
+            return NONE;
+        }
+        let (m, k) = (above.mask[g as usize] as u32, i % 8);
+        if m >> k & 1 == 0 {
+            NONE
+        } else {
+            above.first[g as usize] + (m & ((1 << k) - 1)).count_ones()
+        }
+    };
+    let n = 8 * tiles.len();
+    let payload_of = |j: u32| if j == NONE { P::empty() } else { here.payload[j as usize] };
+    if with_occupancy {
+        let occ: Vec<u32> =
+            (0..n).into_par_iter().with_min_len(MIN_LEN).map(occupied_index).collect();
+        let payload = occ.par_iter().with_min_len(MIN_LEN).map(|&j| payload_of(j)).collect();
+        (payload, occ)
+    } else {
+        let payload = (0..n)
+            .into_par_iter()
+            .with_min_len(MIN_LEN)
+            .map(|i| payload_of(occupied_index(i)))
+            .collect();
+        (payload, Vec::new())
+    }
+}
+
+/// Forward links of the sparse level under `tiles` (node indices of `parent`, whose child
+/// pointers are set and, if sparse, links built).
+fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
+    let neighbour = |p: u32, a: usize| -> u32 {
+        let q = if parent.dense {
+            morton_inc(p as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+        } else {
+            parent.links[p as usize][a]
+        };
+        if q == NONE { NONE } else { parent.child[q as usize] }
+    };
+    let tile_links: Vec<[u32; 3]> = tiles
+        .par_iter()
+        .with_min_len(MIN_LEN / 8)
+        .map(|&p| std::array::from_fn(|a| neighbour(p, a)))
+        .collect();
+    (0..8 * tiles.len())
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .map(|i| {
+            let (t, k) = (i / 8, (i % 8) as u32);
+            let (base, tl) = (8 * t as u32, &tile_links[t]);
+            let link = |a: usize| {
+                let bit = 1 << a;
+                if k & bit == 0 {
+                    base + (k | bit)
+                } else if tl[a] == NONE {
+                    NONE
+                } else {
+                    tl[a] + (k & !bit)
+                }
+            };
+            [link(0), link(1), link(2)]
+        })
+        .collect()
+}
