@@ -1,5 +1,6 @@
-// The filtered voxel renderer for Averages records (voxlod-cpu's render::filtered with
-// appearance::averages), appended to shading.wgsl. One invocation per pixel in 8×8 tiles; each
+// The filtered voxel renderer for Averages and [VJK21] (SGGX) records (voxlod-cpu's
+// render::filtered with appearance::averages, appearance::sggx and appearance::transmittance),
+// appended to shading.wgsl. One invocation per pixel in 8×8 tiles; each
 // pixel sends the 4 rays of PATTERN_4 through the grid with the DDA of render/dda.rs (the same
 // plane expression, tie rule and clipping), composites the voxels with a record front to back
 // until T < 0.001, and evaluates every voxel it meets per hit: radiance and opacity for the
@@ -18,7 +19,7 @@ struct Params {
     light_b: vec4<f32>,      // directional: irradiance; point: intensity
     grid: vec4<f32>,         // origin (f32), w = voxel size (f32)
     dims: vec4<u32>,         // grid dims, w = flags (1: shadows, 2: point light)
-    size: vec4<u32>,         // width, height, max DDA steps, 0
+    size: vec4<u32>,         // width, height, max DDA steps, record kind (0 Averages, 1 [VJK21])
     brick_dims: vec4<u32>,   // bricks per axis, 0
 }
 
@@ -29,18 +30,21 @@ struct Brick {
     before: array<u32, 16>,
 }
 
-// An Averages record decoded on the host by voxlod-format's decoders.
-struct Average {
-    albedo: vec4<f32>,   // linear albedo, w = opacity
-    normal: vec4<f32>,   // unit mean normal (zero: none), w = 0
-    specular: vec4<f32>, // specular level, shininess (record_material), 0, 0
+// A record decoded on the host by voxlod-format's decoders.
+// Averages: a = (albedo, opacity), b = (mean normal (zero: none), 0), c.w = specular level,
+// d.w = shininess. [VJK21]: a = (albedo, σ), b.w = γ, the SGGX matrix's columns in b, c, d.
+struct Record {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+    d: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> brick_table: array<u32>;
 @group(0) @binding(2) var<storage, read> bricks: array<Brick>;
 @group(0) @binding(3) var<storage, read> slots: array<u32>;
-@group(0) @binding(4) var<storage, read> records: array<Average>;
+@group(0) @binding(4) var<storage, read> records: array<Record>;
 @group(0) @binding(5) var<storage, read_write> pixels: array<vec4<f32>>;
 
 const NONE: u32 = 0xffffffffu;
@@ -260,9 +264,106 @@ fn centre_of(c: vec3<i32>) -> vec3<f32> {
     return params.grid.xyz + (vec3<f32>(c) + 0.5) * params.grid.w;
 }
 
-// Opacity::Alpha::apply.
-fn apply_alpha(t: f32, alpha: f32) -> f32 {
-    return t * (1.0 - clamp(alpha, 0.0, 1.0));
+fn is_vjk() -> bool {
+    return params.size.w == 1u;
+}
+
+// ---- [VJK21] transmittance (appearance/transmittance.rs).
+
+fn vjk_f(tau: f32, gamma: f32) -> f32 {
+    return gamma * exp(-tau) + (1.0 - gamma) * max(1.0 - 0.5 * tau, 0.0);
+}
+
+fn vjk_df(tau: f32, gamma: f32) -> f32 {
+    return -gamma * exp(-tau) - select(0.0, 0.5 * (1.0 - gamma), tau < 2.0);
+}
+
+fn vjk_f_inv(t_in: f32, gamma_in: f32) -> f32 {
+    let t = clamp(t_in, 0.0, 1.0);
+    let gamma = clamp(gamma_in, 0.0, 1.0);
+    if t >= 1.0 {
+        return 0.0;
+    }
+    if gamma <= 0.0 {
+        return 2.0 * (1.0 - t);
+    }
+    if t <= gamma * exp(-2.0) {
+        if t <= 0.0 {
+            return F32_MAX; // +∞: f is then 0
+        }
+        return log(gamma / t);
+    }
+    var tau = 0.0;
+    for (var i = 0; i < 8; i++) {
+        tau -= (vjk_f(tau, gamma) - t) / vjk_df(tau, gamma);
+    }
+    return clamp(tau, 0.0, 2.0);
+}
+
+// Opacity::apply: the transmittance after crossing the voxel of record r over `chord` voxels.
+fn apply_opacity(t: f32, r: Record, chord: f32) -> f32 {
+    if is_vjk() {
+        let tau = max(r.a.w, 0.0) * max(chord, 0.0);
+        if tau == 0.0 {
+            return t;
+        }
+        return min(t, vjk_f(vjk_f_inv(t, r.b.w) + tau, r.b.w));
+    }
+    return t * (1.0 - clamp(r.a.w, 0.0, 1.0));
+}
+
+// ---- SGGX shading (appearance/sggx.rs `shade_record`: 16 fixed VNDF samples).
+
+const TAU: f32 = 6.28318530717958647692;
+
+fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let n = normalize_or_zero(v);
+    return select(n, fallback, all(n == vec3<f32>(0.0)));
+}
+
+fn shade_sggx(
+    r: Record,
+    m: MaterialSample,
+    to_viewer: vec3<f32>,
+    light: LightSample,
+    visibility: f32,
+    ambient: vec3<f32>,
+) -> vec3<f32> {
+    let s = mat3x3<f32>(r.b.xyz, r.c.xyz, r.d.xyz);
+    let v = normalize_or(to_viewer, vec3<f32>(0.0, 0.0, 1.0));
+    // basis(v), Duff et al. 2017.
+    let sign = select(-1.0, 1.0, v.z >= 0.0);
+    let ba = -1.0 / (sign + v.z);
+    let bb = v.x * v.y * ba;
+    let wk = vec3<f32>(1.0 + sign * v.x * v.x * ba, sign * bb, -sign * v.x);
+    let wj = vec3<f32>(bb, sign + v.y * v.y * ba, -v.y);
+    let wi = v;
+    let skk = dot(wk, s * wk);
+    let sjj = dot(wj, s * wj);
+    let sii = dot(wi, s * wi);
+    let skj = dot(wk, s * wj);
+    let ski = dot(wk, s * wi);
+    let sji = dot(wj, s * wi);
+    let det = skk * sjj * sii - skj * skj * sii - ski * ski * sjj - sji * sji * skk
+        + 2.0 * skj * ski * sji;
+    let inv_sqrt_sii = 1.0 / sqrt(max(sii, F32_MIN_POSITIVE));
+    let tmp = sqrt(max(sjj * sii - sji * sji, F32_MIN_POSITIVE));
+    let mk = vec3<f32>(sqrt(abs(det)) / tmp, 0.0, 0.0);
+    let mj = vec3<f32>(-inv_sqrt_sii * (ski * sji - skj * sii) / tmp, inv_sqrt_sii * tmp, 0.0);
+    let mi = vec3<f32>(ski, sji, sii) * inv_sqrt_sii;
+    let frame = mat3x3<f32>(wk, wj, wi);
+    let mm = mat3x3<f32>(mk, mj, mi);
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < 16u; i++) {
+        let u = vec2<f32>((f32(i) + 0.5) / 16.0, f32(reverseBits(i) >> 8u) * (1.0 / 16777216.0));
+        let rr = sqrt(max(u.x, 0.0));
+        let phi = TAU * u.y;
+        let h = vec3<f32>(rr * cos(phi), rr * sin(phi), sqrt(max(1.0 - u.x, 0.0)));
+        let wm = normalize_or(mm * h, vec3<f32>(0.0, 0.0, 1.0));
+        let n = normalize_or(frame * wm, wi);
+        sum += shade(m, n, v, light, visibility, ambient);
+    }
+    return sum / 16.0;
 }
 
 // The transmittance of the shadow ray of voxel c toward the light `lit` seen from its centre.
@@ -281,7 +382,7 @@ fn shadow(c: vec3<i32>, lit: Lit) -> f32 {
         if index == NONE {
             continue;
         }
-        t = apply_alpha(t, records[index].albedo.w);
+        t = apply_opacity(t, records[index], (v.t_exit - v.t_enter) * params.eye_grid.w);
         if t < MIN_TRANSMITTANCE {
             break;
         }
@@ -310,16 +411,25 @@ fn radiance(index: u32, c: vec3<i32>) -> vec3<f32> {
         to_eye = vec3<f32>(0.0, 0.0, 1.0);
     }
     let lit = light_at(centre);
-    let n = shading_normal(r.normal.xyz, to_eye);
+    var m: MaterialSample;
+    m.albedo = r.a.xyz;
+    m.specular = vec3<f32>(r.c.w);
+    m.shininess = r.d.w;
+    let shadows = (params.dims.w & 1u) != 0u;
+    if is_vjk() {
+        // SggxRecord keeps the default needs_visibility: always traced with shadows on.
+        var visibility = 1.0;
+        if shadows {
+            visibility = shadow(c, lit);
+        }
+        return shade_sggx(r, m, to_eye, lit.light, visibility, params.ambient.xyz);
+    }
+    let n = shading_normal(r.b.xyz, to_eye);
     var visibility = 1.0;
     // Appearance::needs_visibility: no shadow ray where the normal faces away from the light.
-    if (params.dims.w & 1u) != 0u && dot(n, lit.light.to_light) > 0.0 {
+    if shadows && dot(n, lit.light.to_light) > 0.0 {
         visibility = shadow(c, lit);
     }
-    var m: MaterialSample;
-    m.albedo = r.albedo.xyz;
-    m.specular = vec3<f32>(r.specular.x);
-    m.shininess = r.specular.y;
     return shade(m, n, to_eye, lit.light, visibility, params.ambient.xyz);
 }
 
@@ -343,7 +453,7 @@ fn trace(dir: vec3<f32>) -> vec4<f32> {
             continue;
         }
         let c = radiance(index, v.voxel);
-        let next = apply_alpha(t, records[index].albedo.w);
+        let next = apply_opacity(t, records[index], (v.t_exit - v.t_enter) * params.eye_grid.w);
         sum += (t - next) * c;
         t = next;
         if t < MIN_TRANSMITTANCE {

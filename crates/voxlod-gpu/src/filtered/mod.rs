@@ -1,13 +1,23 @@
-//! Kernel 4 (first part): the filtered voxel renderer for **Averages** records on the GPU, the
-//! mirror of [`voxlod_cpu::render::filtered::render`] over an
-//! [`AppearanceGrid`]`<`[`AverageRecord`]`>`: 4 camera rays per pixel through
+//! Kernel 4 (first part): the filtered voxel renderer for **Averages** and **\[VJK21\]**
+//! (SGGX) records on the GPU, the mirror of [`voxlod_cpu::render::filtered::render`] over an
+//! [`AppearanceGrid`] of [`AverageRecord`] or [`SggxRecord`]: 4 camera rays per pixel through
 //! [`PATTERN_4`](voxlod_cpu::render::sampling::PATTERN_4), each walking the grid with the DDA
 //! of [`voxlod_cpu::render::dda`] (ported line by line: the same plane expression, tie rule and
-//! clipping), compositing the voxels with a record front to back until `T < 0.001`
-//! (`Opacity::Alpha`), each shaded for the voxel-centre-to-camera direction with
-//! `shading.wgsl` (the port of [`voxlod_cpu::shading::shade`]) and, with shadows on, the
-//! visibility of one shadow ray from the voxel centre that ignores the voxels within 1.5 voxel
-//! sizes, skipped where [`Appearance::needs_visibility`](voxlod_cpu::appearance::Appearance::needs_visibility) says the radiance cannot depend on it.
+//! clipping), compositing the voxels with a record front to back until `T < 0.001` with
+//! `Opacity::apply` (alpha for Averages; for \[VJK21\] the non-exponential update of
+//! [`voxlod_cpu::appearance::transmittance::compose`] with the ray's exact chord in voxel
+//! units, `f⁻¹` by the same 8 Newton steps), each voxel shaded for the voxel-centre-to-camera
+//! direction with `shading.wgsl` (the port of [`voxlod_cpu::shading::shade`]) — Averages with
+//! its normal turned toward the viewer, SGGX as the mean over the 16 fixed VNDF samples of
+//! [`voxlod_cpu::appearance::sggx::shade_record`] — and, with shadows on, the visibility of
+//! one shadow ray from the voxel centre that ignores the voxels within 1.5 voxel sizes and
+//! composes every other voxel's opacity with its chord. An Averages voxel whose normal faces
+//! away from the light traces no shadow ray
+//! ([`Appearance::needs_visibility`](voxlod_cpu::appearance::Appearance::needs_visibility));
+//! SGGX voxels always do (the CPU's default).
+//!
+//! The baseline renderer (opaque cubes) and the virtual-mesh and Adaptive records are not
+//! ported yet.
 //!
 //! # No per-frame cache: why evaluating per hit gives the CPU's cached values
 //! The CPU caches per voxel a radiance, an opacity and a visibility. Each is a function of the
@@ -23,8 +33,8 @@
 //! ordinals over the grid's brick dimensions ([`DenseBricks::MAX_ENTRIES`] at most), per brick
 //! a 512-bit occupancy mask in linear order (`x + 8y + 64z`) with the rank of each word's first
 //! voxel ([`GpuBrick`]), and the record index of each rank; the records, decoded on the host by
-//! voxlod-format's own decoders ([`GpuAverage`], 48 bytes instead of the record's 8: inputs
-//! bit-identical to the CPU's; a production kernel would decode the 8 bytes in the shader).
+//! voxlod-format's own decoders ([`GpuRecord`], 64 bytes instead of the record's 8 or 12: inputs
+//! bit-identical to the CPU's; a production kernel would decode the packed bytes in the shader).
 //! Light bounds and screen tiles are not ported: on the CPU they only shorten `t_max` and never
 //! change the image (tested there); the GPU walks to the grid's exit.
 //!
@@ -49,11 +59,12 @@
 //! bound.
 
 use glam::{UVec3, Vec3, Vec4};
-use voxlod_cpu::appearance::{AppearanceGrid, record_material};
+use voxlod_cpu::appearance::{AppearanceGrid, RecordAppearance, record_material};
 use voxlod_cpu::render::bricks::DenseBricks;
 use voxlod_cpu::render::filtered::{FrameCache, Options, check_frame};
-use voxlod_format::records::AverageRecord;
+use voxlod_format::records::{AverageRecord, SggxRecord};
 use voxlod_format::{BRICK_EDGE, BrickMap, GridSpec};
+use voxlod_scene::MaterialSample;
 use voxlod_scene::{Camera, Image, Light};
 
 use crate::raycast::entry;
@@ -105,16 +116,30 @@ pub struct GpuBrick {
     pub before: [u32; 16],
 }
 
-/// An Averages record decoded for the kernel (mirrors WGSL `Average`).
+/// A record decoded for the kernel (mirrors WGSL `Record`). Averages: `a` = (albedo,
+/// opacity), `b` = (mean normal, 0); \[VJK21\]: `a` = (albedo, σ), `b.w` = γ, and the SGGX
+/// matrix's columns in `b`, `c`, `d` (`xyz`). Both: `c.w` = specular level, `d.w` = shininess
+/// (as `record_material` gives them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
-pub struct GpuAverage {
-    /// Linear albedo; `w` = opacity.
-    pub albedo: [f32; 4],
-    /// Unit mean normal (zero: none).
-    pub normal: [f32; 4],
-    /// Specular level, shininess (as `record_material` gives them), 0, 0.
-    pub specular: [f32; 4],
+pub struct GpuRecord {
+    /// Albedo, opacity or σ.
+    pub a: [f32; 4],
+    /// Normal or first matrix column; γ.
+    pub b: [f32; 4],
+    /// Second matrix column; specular level.
+    pub c: [f32; 4],
+    /// Third matrix column; shininess.
+    pub d: [f32; 4],
+}
+
+/// Which records a [`GpuRecords`] holds (the kernel's `size.w`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RecordKind {
+    /// [`AverageRecord`]: alpha compositing, one normal.
+    Averages = 0,
+    /// [`SggxRecord`]: \[VJK21\] transmittance, SGGX shading.
+    Vjk21 = 1,
 }
 
 /// The look-up arrays of a brick map: the dense brick table (`u32::MAX` = empty), the bricks'
@@ -158,8 +183,9 @@ pub fn brick_lookup<T>(map: &BrickMap<T>) -> Result<(Vec<u32>, Vec<GpuBrick>, Ve
     Ok((table, bricks, slots))
 }
 
-/// An Averages grid uploaded to one device.
-pub struct GpuAverages {
+/// A record grid uploaded to one device.
+pub struct GpuRecords {
+    kind: RecordKind,
     grid: GridSpec,
     table: wgpu::Buffer,
     bricks: wgpu::Buffer,
@@ -167,10 +193,29 @@ pub struct GpuAverages {
     records: wgpu::Buffer,
 }
 
-/// The filtered renderer kernel for Averages, compiled for one [`Context`].
+/// The filtered renderer kernel for Averages and \[VJK21\] records, compiled for one
+/// [`Context`].
 pub struct FilteredKernel<'a> {
     ctx: &'a Context,
     pipeline: wgpu::ComputePipeline,
+}
+
+/// Records with a linear albedo (both record kinds of the kernel).
+pub trait HasColor {
+    /// Linear albedo.
+    fn color(&self) -> Vec3;
+}
+
+impl HasColor for AverageRecord {
+    fn color(&self) -> Vec3 {
+        AverageRecord::color(self)
+    }
+}
+
+impl HasColor for SggxRecord {
+    fn color(&self) -> Vec3 {
+        SggxRecord::color(self)
+    }
 }
 
 /// A non-empty byte slice for a storage buffer (a zero-sized binding is invalid).
@@ -190,7 +235,37 @@ impl<'a> FilteredKernel<'a> {
     /// Uploads `app` after the CPU renderer's checks on it (a [`FrameCache`] is built over its
     /// own records and dropped: invalid grid, inconsistent records or side records give the
     /// CPU's errors).
-    pub fn upload_averages(&self, app: &AppearanceGrid<AverageRecord>) -> Result<GpuAverages> {
+    pub fn upload_averages(&self, app: &AppearanceGrid<AverageRecord>) -> Result<GpuRecords> {
+        self.upload(app, RecordKind::Averages, |r, m| GpuRecord {
+            a: m.albedo.extend(r.opacity()).to_array(),
+            b: r.normal().extend(0.0).to_array(),
+            c: [0.0, 0.0, 0.0, m.specular.x],
+            d: [0.0, 0.0, 0.0, m.shininess],
+        })
+    }
+
+    /// Uploads a \[VJK21\] (SGGX) grid, with the checks of [`FilteredKernel::upload_averages`].
+    pub fn upload_vjk21(&self, app: &AppearanceGrid<SggxRecord>) -> Result<GpuRecords> {
+        self.upload(app, RecordKind::Vjk21, |r, m| {
+            let s = r.matrix();
+            GpuRecord {
+                a: m.albedo.extend(r.sigma_t()).to_array(),
+                b: s.x_axis.extend(r.gamma()).to_array(),
+                c: s.y_axis.extend(m.specular.x).to_array(),
+                d: s.z_axis.extend(m.shininess).to_array(),
+            }
+        })
+    }
+
+    fn upload<R>(
+        &self,
+        app: &AppearanceGrid<R>,
+        kind: RecordKind,
+        decode: impl Fn(&R, &MaterialSample) -> GpuRecord,
+    ) -> Result<GpuRecords>
+    where
+        R: RecordAppearance<Params = ()> + HasColor,
+    {
         drop(FrameCache::with_layout(app, &app.records)?);
         if let Some(s) = app.specular.as_ref().filter(|s| s.len() != app.records.len()) {
             return Err(Error::Cpu(voxlod_cpu::Error::InvalidParameter {
@@ -200,27 +275,23 @@ impl<'a> FilteredKernel<'a> {
             }));
         }
         let (mut table, mut bricks, mut slots) = brick_lookup(&app.records)?;
-        let mut records: Vec<GpuAverage> = app
+        let mut records: Vec<GpuRecord> = app
             .records
             .values()
             .iter()
             .enumerate()
             .map(|(i, r)| {
-                let m = record_material(r.color(), app.specular.as_ref().map(|s| &s[i]));
-                GpuAverage {
-                    albedo: m.albedo.extend(r.opacity()).to_array(),
-                    normal: r.normal().extend(0.0).to_array(),
-                    specular: [m.specular.x, m.shininess, 0.0, 0.0],
-                }
+                decode(r, &record_material(r.color(), app.specular.as_ref().map(|s| &s[i])))
             })
             .collect();
         let ctx = self.ctx;
-        Ok(GpuAverages {
+        Ok(GpuRecords {
+            kind,
             grid: app.grid,
             table: ctx.storage_init("brick table", non_empty(&mut table))?,
             bricks: ctx.storage_init("brick masks", non_empty(&mut bricks))?,
             slots: ctx.storage_init("record slots", non_empty(&mut slots))?,
-            records: ctx.storage_init("Averages records", non_empty(&mut records))?,
+            records: ctx.storage_init("filtered records", non_empty(&mut records))?,
         })
     }
 
@@ -230,7 +301,7 @@ impl<'a> FilteredKernel<'a> {
     /// ambient term or background.
     pub fn render(
         &self,
-        app: &GpuAverages,
+        app: &GpuRecords,
         camera: &Camera,
         light: &Light,
         background: Vec3,
@@ -270,7 +341,7 @@ impl<'a> FilteredKernel<'a> {
             light_b: lb.extend(0.0).to_array(),
             grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
             dims: dims.extend(u32::from(shadows) | if point { 2 } else { 0 }).to_array(),
-            size: [width, height, steps, 0],
+            size: [width, height, steps, app.kind as u32],
             brick_dims: brick_dims.extend(0).to_array(),
         };
         let bytes = width as u64 * height as u64 * 16;
@@ -298,7 +369,7 @@ impl<'a> FilteredKernel<'a> {
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(lx, ly, 1);
         }
-        ctx.submit("rendering filtered Averages", encoder)?;
+        ctx.submit("rendering filtered records", encoder)?;
         let raw = ctx.read(&out, bytes)?;
         let pixels: Vec<Vec4> = bytemuck::cast_slice::<u8, [f32; 4]>(&raw)
             .iter()
@@ -348,12 +419,13 @@ mod tests {
         );
         assert_mirrors(
             WGSL,
-            "Average",
-            size_of::<GpuAverage>(),
+            "Record",
+            size_of::<GpuRecord>(),
             &[
-                ("albedo", offset_of!(GpuAverage, albedo)),
-                ("normal", offset_of!(GpuAverage, normal)),
-                ("specular", offset_of!(GpuAverage, specular)),
+                ("a", offset_of!(GpuRecord, a)),
+                ("b", offset_of!(GpuRecord, b)),
+                ("c", offset_of!(GpuRecord, c)),
+                ("d", offset_of!(GpuRecord, d)),
             ],
         );
     }

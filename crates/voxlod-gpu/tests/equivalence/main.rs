@@ -43,8 +43,10 @@ fn equivalence_suite() {
         suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
         suite.run("ground truth (proptest)", backend, ground_truth::property);
         suite.run("ground truth (dispatches)", backend, ground_truth::dispatch_split);
-        suite.run("filtered Averages (scenes)", backend, filtered::scenes_body);
-        suite.run("filtered Averages (proptest)", backend, filtered::property);
+        suite.run("filtered Averages (scenes)", backend, filtered::averages_scenes);
+        suite.run("filtered Averages (proptest)", backend, filtered::averages_property);
+        suite.run("filtered VJK21 (scenes)", backend, filtered::vjk21_scenes);
+        suite.run("filtered VJK21 (proptest)", backend, filtered::vjk21_property);
     }
     suite.finish();
 }
