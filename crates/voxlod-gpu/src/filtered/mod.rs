@@ -19,6 +19,22 @@
 //! The baseline renderer (opaque cubes) and the virtual-mesh and Adaptive records are not
 //! ported yet.
 //!
+//! # Use
+//! ```no_run
+//! # fn demo(app: &voxlod_cpu::appearance::AppearanceGrid<voxlod_format::records::AverageRecord>,
+//! #         camera: &voxlod_scene::Camera, light: &voxlod_scene::Light) -> voxlod_gpu::Result<()> {
+//! use voxlod_cpu::render::filtered::Options;
+//! let ctx = voxlod_gpu::Context::new()?;
+//! let kernel = voxlod_gpu::filtered::FilteredKernel::new(&ctx)?;
+//! let gpu = kernel.upload_averages(app)?; // or upload_vjk21 for an SggxRecord grid
+//! let options = Options { width: 256, height: 256, ..Options::default() };
+//! let image = kernel.render(&gpu, camera, light, glam::Vec3::ZERO, &options)?;
+//! # Ok(()) }
+//! ```
+//! `voxlod render`/`voxlod compare` of voxel representations do not take `--backend gpu` yet:
+//! this is the entry point they would call in place of
+//! [`voxlod_cpu::render::filtered::render`] (same inputs, same image up to the stated bound).
+//!
 //! # No per-frame cache: why evaluating per hit gives the CPU's cached values
 //! The CPU caches per voxel a radiance, an opacity and a visibility. Each is a function of the
 //! voxel alone (its record, its centre, the eye, the light, the ambient term): the direction is
@@ -49,6 +65,13 @@
 //! voxel) is the next step where shadows dominate. Plain voxel stepping (no brick skipping)
 //! wastes steps in empty space; the CPU's brick skipping reaches the same voxels with the same
 //! `t` and can be ported as is.
+//!
+//! Measured (`cargo bench -p voxlod-gpu --bench kernels -- filtered`, bunny 64³, 128×128,
+//! shadows, 2 cores shared with other jobs, load ~10): on lavapipe — **CPU timings of the GPU
+//! path**, not GPU speed — 1.29 s (Averages) and 0.96 s (\[VJK21\]) per frame, against
+//! 87 ms and 93 ms for voxlod-cpu's cold-cache frame: on a CPU, repeating every shadow ray per
+//! hit and stepping through empty bricks cost far more than the CPU path's cache and brick
+//! skipping save in synchronisation.
 //!
 //! # Agreement with the CPU
 //! Same arithmetic except float rounding: voxel centres are computed in `f32` here (`f64`
