@@ -69,9 +69,11 @@
 //! Measured (`cargo bench -p voxlod-gpu --bench kernels -- filtered`, bunny 64³, 128×128,
 //! shadows, 2 cores shared with other jobs, load ~10): on lavapipe — **CPU timings of the GPU
 //! path**, not GPU speed — 1.29 s (Averages) and 0.96 s (\[VJK21\]) per frame, against
-//! 87 ms and 93 ms for voxlod-cpu's cold-cache frame: on a CPU, repeating every shadow ray per
-//! hit and stepping through empty bricks cost far more than the CPU path's cache and brick
-//! skipping save in synchronisation.
+//! 87 ms and 93 ms for voxlod-cpu's cold-cache frame. Indicative only: lavapipe's timings
+//! swing by two orders of magnitude with the machine's load (the equivalence suite's
+//! ground-truth proptest took 422 s loaded and 1.4 s on a quiet machine), and the GPU path
+//! also repeats every shadow ray per hit and steps through empty bricks, which the CPU path's
+//! cache and brick skipping avoid.
 //!
 //! # Agreement with the CPU
 //! Same arithmetic except float rounding: voxel centres are computed in `f32` here (`f64`
