@@ -141,7 +141,7 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
     })
 }
 
-fn backend_slug(backend: &Backend) -> String {
+pub fn backend_slug(backend: &Backend) -> String {
     backend
         .name()
         .chars()

@@ -1,6 +1,6 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
-//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`]),
+//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -10,6 +10,7 @@
 //! No adapter at all is a failure (loudly), unless `VOXLOD_ALLOW_NO_GPU=1`
 //! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
 
+mod filtered;
 mod ground_truth;
 mod harness;
 mod images;
@@ -42,6 +43,10 @@ fn equivalence_suite() {
         suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
         suite.run("ground truth (proptest)", backend, ground_truth::property);
         suite.run("ground truth (dispatches)", backend, ground_truth::dispatch_split);
+        suite.run("filtered Averages (scenes)", backend, filtered::averages_scenes);
+        suite.run("filtered Averages (proptest)", backend, filtered::averages_property);
+        suite.run("filtered VJK21 (scenes)", backend, filtered::vjk21_scenes);
+        suite.run("filtered VJK21 (proptest)", backend, filtered::vjk21_property);
     }
     suite.finish();
 }

@@ -136,18 +136,7 @@ fn validate<A: Appearance + ?Sized>(
     background: Vec3,
     options: &Options,
 ) -> Result<Light> {
-    check_image_size(options.width, options.height)?;
-    camera.validate()?;
-    let light = light.validated()?;
-    for (name, v) in [("ambient", options.ambient), ("background", background)] {
-        if !(v.is_finite() && v.min_element() >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name,
-                value: v.to_string(),
-                reason: "must be finite and non-negative".into(),
-            });
-        }
-    }
+    let light = check_frame(camera, light, background, options)?;
     let app = cache.appearance();
     if app.grid() != cache.grid() || app.len() != cache.slots_len() {
         return Err(Error::InvalidParameter {
@@ -159,6 +148,30 @@ fn validate<A: Appearance + ?Sized>(
                 cache.slots_len()
             ),
         });
+    }
+    Ok(light)
+}
+
+/// The checks of a frame that do not depend on the appearance: image size, camera, light,
+/// ambient term and background (finite, non-negative). Returns the validated light. Other
+/// backends of this renderer (voxlod-gpu) call it, so bad input gets the same errors.
+pub fn check_frame(
+    camera: &Camera,
+    light: &Light,
+    background: Vec3,
+    options: &Options,
+) -> Result<Light> {
+    check_image_size(options.width, options.height)?;
+    camera.validate()?;
+    let light = light.validated()?;
+    for (name, v) in [("ambient", options.ambient), ("background", background)] {
+        if !(v.is_finite() && v.min_element() >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name,
+                value: v.to_string(),
+                reason: "must be finite and non-negative".into(),
+            });
+        }
     }
     Ok(light)
 }
