@@ -4,6 +4,8 @@
 //! - [`scene`]: meshes, materials, cameras, lights, OBJ/glTF loaders, procedural scenes;
 //! - [`cpu`]: the CPU references (voxelizers, ray casting, renderers, shading);
 //! - [`eval`]: metrics (MSE, PSNR, SSIM) and reports;
+//! - [`gpu`]: the wgpu backend (kernels checked against the CPU references; only used when
+//!   asked for, e.g. `--backend gpu`: without a GPU everything else still runs);
 //!
 //! and adds scene specs with embedded models ([`scenes`]), the default experiment
 //! ([`experiment`]) and peak-memory measurement ([`alloc`]).
@@ -19,4 +21,5 @@ pub use error::Error;
 pub use voxlod_cpu as cpu;
 pub use voxlod_eval as eval;
 pub use voxlod_format as format;
+pub use voxlod_gpu as gpu;
 pub use voxlod_scene as scene;

@@ -41,6 +41,10 @@ pub enum Command {
     Cone(ConeArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
+    /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
+    /// with metavoxels, and measure its trade: attenuation models against the exact reference,
+    /// time and memory per metavoxel size.
+    Volume(VolumeArgs),
     /// List the builtin scenes and their parameters.
     Scenes,
 }
@@ -66,6 +70,16 @@ impl Default for ReportArgs {
     }
 }
 
+/// Where a command's kernel runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU reference (rayon).
+    Cpu,
+    /// The wgpu backend on the adapter `VOXLOD_ADAPTER` selects (default: a discrete GPU
+    /// first); no adapter is an error, never a silent fall-back to the CPU.
+    Gpu,
+}
+
 /// Voxelization mode.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum ModeArg {
@@ -88,6 +102,9 @@ pub struct VoxelizeArgs {
     /// Which voxels to set.
     #[arg(long, value_enum, default_value_t = ModeArg::Conservative)]
     pub mode: ModeArg,
+    /// Where to voxelize (gpu: conservative and thin modes; the same voxels as the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Output file: .vxl (voxlod container) or .binvox.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -123,6 +140,10 @@ pub struct RenderArgs {
     /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output.
     #[arg(long)]
     pub gbuffer: bool,
+    /// Where to render (gpu: opaque untextured materials; equal to the CPU's image within the
+    /// equivalence suite's bound).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -187,6 +208,34 @@ pub struct ConeArgs {
     pub ao_radius: f32,
     /// Output directory.
     #[arg(short, long, default_value = "out/cone")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod volume`.
+#[derive(Debug, Args)]
+pub struct VolumeArgs {
+    /// Preset: smoke, explosion or clouds.
+    pub preset: String,
+    /// Particles (0: the preset's default: smoke 10000, explosion 4000, clouds 3000).
+    #[arg(long, default_value_t = 0)]
+    pub particles: usize,
+    /// Voxels per axis of the volume; every metavoxel size must divide it.
+    #[arg(long, default_value_t = 128)]
+    pub res: u32,
+    /// Metavoxel sizes M measured, comma-separated.
+    #[arg(long, default_value = "8,16,32,64", value_delimiter = ',')]
+    pub m: Vec<u32>,
+    /// Image side in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub image: u32,
+    /// Rays per pixel of the mesh's ground truth.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/volume")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]

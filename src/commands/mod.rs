@@ -6,6 +6,7 @@ mod cone;
 mod info;
 mod render;
 mod report;
+mod volume;
 mod voxelize;
 
 use std::path::Path;
@@ -19,9 +20,24 @@ pub use cone::cone;
 pub use info::info;
 pub use render::render;
 pub use report::report;
+pub use volume::volume;
 pub use voxelize::voxelize;
 
-use crate::cli::CompareArgs;
+use crate::cli::{BackendArg, CompareArgs};
+
+/// The GPU context for `--backend gpu` (an error if there is no adapter: never a fall-back),
+/// and the line naming the backend that every command prints.
+fn backend(choice: BackendArg) -> Result<(Option<voxlod::gpu::Context>, String)> {
+    match choice {
+        BackendArg::Cpu => Ok((None, "cpu (rayon)".into())),
+        BackendArg::Gpu => {
+            let ctx = voxlod::gpu::Context::new().context("opening the GPU backend")?;
+            // The summary says when the adapter is a CPU implementation (CPU timings).
+            let name = format!("gpu: {}", ctx.summary());
+            Ok((Some(ctx), name))
+        }
+    }
+}
 
 /// How to talk to the user.
 pub struct Ui {

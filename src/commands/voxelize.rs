@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use voxlod::cpu::voxelize::{self, Mode};
 use voxlod::format::{GridSpec, Occupancy, binvox, vxl};
 
-use super::{Ui, load_scene, print_json};
+use super::{Ui, backend, load_scene, print_json};
 use crate::cli::{ModeArg, VoxelizeArgs};
 
 #[derive(serde::Serialize)]
@@ -20,6 +20,7 @@ struct Summary {
     voxels: usize,
     bricks: usize,
     seconds: f64,
+    backend: String,
     output: String,
 }
 
@@ -29,6 +30,7 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
     if !matches!(ext.as_deref(), Some("vxl" | "binvox")) {
         bail!("output {} must end in .vxl or .binvox", args.output.display());
     }
+    let (gpu, backend_name) = backend(args.backend)?;
     let spinner = ui.spinner();
     spinner.set_message(format!("loading {}", args.scene));
     let scene = load_scene(&args.scene)?;
@@ -47,11 +49,22 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         grid.dims
     ));
     let start = Instant::now();
-    let options = voxelize::Options { mode, triangle_lists: false, ..Default::default() };
-    let vox = voxelize::voxelize(&geometry, &grid, &options).context("voxelizing")?;
+    let occupancy = match &gpu {
+        None => {
+            let options = voxelize::Options { mode, triangle_lists: false, ..Default::default() };
+            let vox = voxelize::voxelize(&geometry, &grid, &options).context("voxelizing")?;
+            vox.voxels.map(|_| Occupancy)
+        }
+        Some(ctx) => {
+            let kernel = voxlod::gpu::voxelize::Voxelizer::new(ctx)?;
+            let options = voxlod::gpu::voxelize::VoxelizeOptions { mode, counts: false };
+            let vox =
+                kernel.voxelize(&geometry, &grid, &options).context("voxelizing on the GPU")?;
+            vox.to_brick_map()?.map(|_| Occupancy)
+        }
+    };
     let seconds = start.elapsed().as_secs_f64();
     spinner.set_message(format!("writing {}", args.output.display()));
-    let occupancy = vox.voxels.map(|_| Occupancy);
     let written = if ext.as_deref() == Some("vxl") {
         let meta = [
             ("scene".to_string(), args.scene.clone()),
@@ -75,11 +88,13 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         voxels: occupancy.len(),
         bricks: occupancy.bricks().len(),
         seconds,
+        backend: backend_name,
         output: args.output.display().to_string(),
     };
     if args.json {
         return print_json(&summary);
     }
+    println!("backend: {}", summary.backend);
     println!(
         "{} ({} triangles) → {} voxels ({} mode) in a {}×{}×{} grid of {} bricks, {:.3} s → {}",
         summary.scene,

@@ -10,6 +10,7 @@
 mod baseline;
 mod filtered;
 mod views;
+pub mod volume;
 
 use std::time::{Duration, Instant};
 

@@ -162,3 +162,70 @@ fn compare_measures_every_representation_and_rejects_bad_arguments() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 4: `--backend gpu` never falls back to the CPU: an adapter that is not there, or a
+/// request without a GPU kernel (solid voxelization), is an error (and leaves no file); where an adapter exists,
+/// GPU voxelization writes the CPU's voxels.
+#[test]
+fn gpu_backend_is_explicit_and_never_falls_back() {
+    let dir = temp_dir("gpu");
+    let (vxl, png) = (dir.join("g.vxl"), dir.join("g.png"));
+    let run = |args: &[&str], adapter: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_voxlod"));
+        c.args(args).arg("--quiet");
+        if let Some(a) = adapter {
+            c.env("VOXLOD_ADAPTER", a);
+        }
+        c.output().expect("the voxlod binary runs")
+    };
+    let cases: [(&[&str], Option<&str>, &str); 3] = [
+        (
+            &[
+                "voxelize",
+                "builtin:cube",
+                "--res",
+                "8",
+                "--mode",
+                "solid",
+                "--backend",
+                "gpu",
+                "-o",
+                s(&vxl),
+            ],
+            None,
+            "solid",
+        ),
+        (
+            &["voxelize", "builtin:cube", "--res", "8", "--backend", "gpu", "-o", s(&vxl)],
+            Some("no-such-adapter-anywhere"),
+            "adapter",
+        ),
+        (
+            &["render", "builtin:cube", "--size", "8x8", "--backend", "gpu", "-o", s(&png)],
+            Some("no-such-adapter-anywhere"),
+            "adapter",
+        ),
+    ];
+    for (args, adapter, needle) in cases {
+        let out = run(args, adapter);
+        // The Vulkan loader may print its own lines on stderr: look for ours anywhere.
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded: no fall-back allowed");
+        assert!(stderr.contains("error: ") && stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "a failure left a file");
+    if !voxlod::gpu::adapters().is_empty() {
+        let voxels = |backend: &str| {
+            let path = dir.join(format!("{backend}.vxl"));
+            let args =
+                ["voxelize", "builtin:bunny", "--res", "24", "--backend", backend, "-o", s(&path)];
+            let out = run(&[&args[..], &["--json"]].concat(), None);
+            let v = json(&out);
+            assert!(v["backend"].as_str().unwrap().starts_with(backend), "{v}");
+            v["voxels"].as_u64().unwrap()
+        };
+        assert_eq!(voxels("gpu"), voxels("cpu"));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -4,3 +4,4 @@ mod cli;
 mod cone;
 mod experiment;
 mod scene_files;
+mod volume;

@@ -8,6 +8,8 @@
 //! `cargo bench -p voxlod-cpu --bench filtered`; before the criterion runs it prints the
 //! precompute times, the cache build times, and single-core CPU times of cold, warm and
 //! new-view frames, which other processes on the machine distort less than wall time.
+//! `VOXLOD_BENCH_ONLY=averages` (or `vjk21`, `virtual-mesh`; comma-separated) skips the
+//! precompute and frames of the other representations, e.g. for profiling one of them.
 
 mod support;
 
@@ -119,22 +121,27 @@ fn renders(c: &mut Criterion) {
     group.sample_size(10);
     group.throughput(Throughput::Elements(u64::from(SIZE * SIZE)));
 
-    let start = Instant::now();
-    let averages = precompute(&ctx, &options, averages::fit).expect("averages");
-    eprintln!("averages precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
-    bench_representation(&mut group, "averages", &averages, &averages.records, &view);
-    drop(averages);
+    let only = std::env::var("VOXLOD_BENCH_ONLY").ok();
+    let wanted = |name: &str| only.as_ref().is_none_or(|o| o.split(',').any(|w| w.trim() == name));
 
-    let start = Instant::now();
-    let sggx = precompute(&ctx, &options, sggx::fit).expect("sggx");
-    eprintln!("vjk21 precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
-    bench_representation(&mut group, "vjk21", &sggx, &sggx.records, &view);
-    drop(sggx);
-
-    let start = Instant::now();
-    let mesh = VirtualMeshGrid::new(precompute(&ctx, &options, vmesh::fit).expect("vmesh"));
-    eprintln!("virtual mesh precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
-    bench_representation(&mut group, "virtual-mesh", &mesh, &mesh.grid.records, &view);
+    if wanted("averages") {
+        let start = Instant::now();
+        let averages = precompute(&ctx, &options, averages::fit).expect("averages");
+        eprintln!("averages precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
+        bench_representation(&mut group, "averages", &averages, &averages.records, &view);
+    }
+    if wanted("vjk21") {
+        let start = Instant::now();
+        let sggx = precompute(&ctx, &options, sggx::fit).expect("sggx");
+        eprintln!("vjk21 precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
+        bench_representation(&mut group, "vjk21", &sggx, &sggx.records, &view);
+    }
+    if wanted("virtual-mesh") {
+        let start = Instant::now();
+        let mesh = VirtualMeshGrid::new(precompute(&ctx, &options, vmesh::fit).expect("vmesh"));
+        eprintln!("virtual mesh precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
+        bench_representation(&mut group, "virtual-mesh", &mesh, &mesh.grid.records, &view);
+    }
     group.finish();
 }
 

@@ -11,7 +11,18 @@
 //! - `raycast`: 256×256 primary rays on the bunny, framing view; CPU reference
 //!   `Bvh::intersect` in a loop on one thread; GPU with the BVH already uploaded.
 //!
-//! `cargo bench -p voxlod-gpu --bench kernels`
+//! - `ground_truth`: the cornell box, 128×128 at 16 rays per pixel with shadows; CPU reference
+//!   `voxlod_cpu::render::ground_truth::render` (rayon, all cores); both also fill the
+//!   pixel-centre G-buffer (one extra ray per pixel); GPU with the scene already uploaded.
+//!
+//! - `filtered`: the filtered voxel renderer, the bunny at 64³ with Averages and \[VJK21\]
+//!   records (32 lines per voxel), 128×128 at 4 rays per pixel, directional light with shadows;
+//!   CPU reference `voxlod_cpu::render::filtered::render` (rayon, all cores) with its cache
+//!   cleared before every frame (cold: the GPU kernel keeps no cache, so each GPU frame is a
+//!   cold frame); GPU with the records already uploaded. On lavapipe: CPU timings of the GPU
+//!   path.
+//!
+//! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
 use std::hint::black_box;
 use std::path::Path;
@@ -110,5 +121,82 @@ fn raycast(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, voxelize, raycast);
+fn ground_truth(c: &mut Criterion) {
+    use voxlod_cpu::render::ground_truth::{Options, render};
+    use voxlod_gpu::ground_truth::GroundTruthKernel;
+    let ctx = context();
+    let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
+    let g = scene.geometry();
+    let bvh = Bvh::new(&g).unwrap();
+    let camera = scene.default_camera().unwrap();
+    let options = Options { width: 128, height: 128, spp: 16, ..Options::default() };
+    let mut group = c.benchmark_group("ground_truth_128x128_16spp");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(128 * 128 * 16));
+    group.bench_function("cornell/cpu", |b| {
+        b.iter(|| black_box(render(&scene, &g, &bvh, &camera, &options).unwrap()))
+    });
+    if let Some(ctx) = &ctx {
+        let kernel = GroundTruthKernel::new(ctx).unwrap();
+        let gpu = kernel.upload(&scene, &g, &bvh).unwrap();
+        group.bench_function("cornell/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&gpu, &camera, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+fn filtered(c: &mut Criterion) {
+    use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+    use voxlod_cpu::appearance::sampler::SamplingContext;
+    use voxlod_cpu::appearance::{averages, sggx};
+    use voxlod_cpu::render::filtered::{FrameCache, Options, render};
+    use voxlod_gpu::filtered::FilteredKernel;
+    let ctx = context();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
+    let scene = voxlod_scene::Scene::load(&path).expect("bunny");
+    let g = scene.geometry();
+    let (lo, hi) = scene.bounds().unwrap();
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
+    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Default::default()).unwrap();
+    let sampling = SamplingContext::new(&scene, &g, &vox).unwrap();
+    let opts = PrecomputeOptions { rays: 32, seed: 0 };
+    let avg = precompute(&sampling, &opts, averages::fit).unwrap();
+    let vjk = precompute(&sampling, &opts, sggx::fit).unwrap();
+    let camera = scene.default_camera().unwrap();
+    let light = scene.light();
+    let bg = scene.background;
+    let options = Options { width: 128, height: 128, ..Options::default() };
+    let mut group = c.benchmark_group("filtered_bunny64_128x128");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(128 * 128));
+    let mut cache = FrameCache::with_layout(&avg, &avg.records).unwrap();
+    group.bench_function("averages/cpu-cold", |b| {
+        b.iter(|| {
+            cache.clear();
+            black_box(render(&mut cache, &camera, &light, bg, &options).unwrap())
+        })
+    });
+    let mut cache = FrameCache::with_layout(&vjk, &vjk.records).unwrap();
+    group.bench_function("vjk21/cpu-cold", |b| {
+        b.iter(|| {
+            cache.clear();
+            black_box(render(&mut cache, &camera, &light, bg, &options).unwrap())
+        })
+    });
+    if let Some(ctx) = &ctx {
+        let kernel = FilteredKernel::new(ctx).unwrap();
+        let up = kernel.upload_averages(&avg).unwrap();
+        group.bench_function("averages/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&up, &camera, &light, bg, &options).unwrap()))
+        });
+        let up = kernel.upload_vjk21(&vjk).unwrap();
+        group.bench_function("vjk21/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&up, &camera, &light, bg, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, voxelize, raycast, ground_truth, filtered);
 criterion_main!(benches);

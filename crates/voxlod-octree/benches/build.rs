@@ -104,6 +104,56 @@ fn report(tree: &Octree<AveragePayload>) {
     );
 }
 
+/// CPU time of this process so far (all threads), from `/proc/self/task/*/schedstat` (ns on
+/// CPU); `None` off Linux. Wall-clock figures on a loaded shared machine measure the load, CPU
+/// time the work.
+fn cpu_ns() -> Option<u64> {
+    let mut total = 0;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let s = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total += s.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total)
+}
+
+/// User and kernel CPU time of this process so far, in seconds, from `/proc/self/stat`
+/// (clock ticks, 10 ms); `None` off Linux.
+fn user_sys() -> Option<(f64, f64)> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let f: Vec<&str> = s.rsplit_once(')')?.1.split_whitespace().collect();
+    Some((f.get(11)?.parse::<f64>().ok()? / 100.0, f.get(12)?.parse::<f64>().ok()? / 100.0))
+}
+
+/// Mean wall and CPU time of `runs` calls of `f`, printed with the throughput.
+fn time_cpu<T>(what: &str, n: u64, runs: u32, mut f: impl FnMut() -> T) {
+    let _ = black_box(f());
+    let (t0, c0, us0) = (std::time::Instant::now(), cpu_ns(), user_sys());
+    for _ in 0..runs {
+        black_box(f());
+    }
+    let wall = t0.elapsed().as_secs_f64() / runs as f64;
+    let cpu = cpu_ns().zip(c0).map(|(c1, c0)| (c1 - c0) as f64 * 1e-9 / runs as f64);
+    let threads = rayon::current_num_threads();
+    let split = match (user_sys(), us0) {
+        (Some((u1, s1)), Some((u0, s0))) => format!(
+            "; user {:.1} ms, kernel {:.1} ms",
+            (u1 - u0) * 1e3 / runs as f64,
+            (s1 - s0) * 1e3 / runs as f64
+        ),
+        _ => String::new(),
+    };
+    match cpu {
+        Some(cpu) => eprintln!(
+            "  {what}: wall {:.2} ms ({:.2} M/s), CPU {:.2} ms ({:.2} M/s per CPU-second; {threads} threads{split})",
+            wall * 1e3,
+            n as f64 / wall / 1e6,
+            cpu * 1e3,
+            n as f64 / cpu / 1e6
+        ),
+        None => eprintln!("  {what}: wall {:.2} ms ({:.2} M/s)", wall * 1e3, n as f64 / wall / 1e6),
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let voxels = shell();
     let n = voxels.len() as u64;
@@ -111,11 +161,26 @@ fn bench(c: &mut Criterion) {
     let tree = Octree::from_morton_sorted(grid(), voxels.clone(), &options).expect("built");
     report(&tree);
 
+    let opacity: Vec<(u64, Opacity)> =
+        voxels.iter().map(|&(k, p)| (k, Opacity(p.opacity))).collect();
+    let directional: Vec<(u64, Directional<AveragePayload>)> =
+        voxels.iter().map(|&(k, p)| (k, Directional::isotropic(p))).collect();
+    eprintln!(
+        "build, mean of 20, 10, 10 runs (input clone and the previous tree's drop included):"
+    );
+    time_cpu("topology + links", n, 20, || {
+        Octree::from_morton_sorted(grid(), opacity.clone(), &options).expect("built")
+    });
+    time_cpu("+ Averages prefilter", n, 10, || {
+        Octree::from_morton_sorted(grid(), voxels.clone(), &options).expect("built")
+    });
+    time_cpu("+ Averages + directional", n, 10, || {
+        Octree::from_morton_sorted(grid(), directional.clone(), &options).expect("built")
+    });
+
     let mut g = c.benchmark_group("build");
     g.throughput(Throughput::Elements(n));
     g.sample_size(10);
-    let opacity: Vec<(u64, Opacity)> =
-        voxels.iter().map(|&(k, p)| (k, Opacity(p.opacity))).collect();
     g.bench_function("topology", |b| {
         b.iter_batched(
             || opacity.clone(),
@@ -130,8 +195,6 @@ fn bench(c: &mut Criterion) {
             BatchSize::LargeInput,
         )
     });
-    let directional: Vec<(u64, Directional<AveragePayload>)> =
-        voxels.iter().map(|&(k, p)| (k, Directional::isotropic(p))).collect();
     g.bench_function("averages+directional", |b| {
         b.iter_batched(
             || directional.clone(),

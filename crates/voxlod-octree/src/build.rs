@@ -1,19 +1,31 @@
-//! The CPU reference build, bottom-up from Morton-sorted voxels (rayon inside each step):
+//! The CPU reference build, bottom-up from Morton-sorted voxels, then top-down level by level.
+//! Every step is linear in the nodes it touches: no sort, no hash map, no search (rayon over the
+//! nodes of each step):
 //! 1. **Input check**: coordinates inside the grid, strictly increasing Morton codes (no
 //!    duplicate), every payload accepted by [`Payload::check`].
 //! 2. **Occupied levels, bottom-up**: the occupied nodes of level `l+1` are the distinct codes
 //!    `c >> 3` of level `l`; each one's payload is [`Payload::prefilter`] of its (up to) eight
-//!    occupied children, the others counting as empty. Sorted input stays sorted at every level.
-//! 3. **Tiles per sparse level**: the parents of the backward closure of the occupied nodes
-//!    (`octree` module docs), sorted and deduplicated; each parent gets one 2×2×2 tile.
-//! 4. **Arrays**: dense levels scatter their occupied payloads into `r³` arrays; sparse levels
-//!    scatter theirs into the tiles and point each parent at its tile (tile `t` starts at node
-//!    `8t`), with masks from the occupied children.
-//! 5. **Neighbour links, top-down**: the +a neighbour of child `k` is in the same tile when `k`'s
-//!    a-bit is 0 (`k | bit`); otherwise it is child `k & !bit` of the parent's +a neighbour's
-//!    tile (found through the parent level's links, or by index on the dense level). O(1) per
-//!    node, no search, and it finds every existing neighbour because a tile exists exactly when
-//!    its parent is a node of the closure.
+//!    occupied children, the others counting as empty, and it records its children's mask and
+//!    the index of its first occupied child. Sorted input stays sorted at every level.
+//! 3. **Sparse levels, top-down**, each from the finished level above it (`octree` module docs
+//!    for the node set):
+//!    - *tiles*: a node `q` of level `l+1` gets a 2×2×2 tile of children iff it is the parent of
+//!      a backward neighbour of an occupied child of some occupied `q + d`, `d ∈ {0,1}³`; that
+//!      is the case iff `d` is a subset of the axes along which one of `q + d`'s occupied children
+//!      lies in the lower half (`SHIFTS`). On the dense level the occupied nodes mark their
+//!      `q − d` directly (Morton decrement); on a sparse level every node reads its seven forward
+//!      corners through the level's links, as the sampler does. Marked nodes, in storage order,
+//!      are the tiles in Morton order: tile `t` starts at node `8t`;
+//!    - *payloads*: tile `t`'s occupied children are a run of the occupied list, found through the
+//!      parent's first-child index and mask (no search);
+//!    - *links*: per tile, the +a neighbour tile is the child tile of the parent's +a neighbour
+//!      (through the parent level's links, or a Morton increment on the dense level); child `k`'s
+//!      +a neighbour is `k | bit` in its own tile when `k`'s a-bit is 0, else child `k & !bit` of
+//!      the neighbour tile. It finds every existing neighbour because a tile exists exactly when
+//!      its parent is a node of the closure.
+//!
+//! The first build (sorted closure parents, per-node link search of the parents) is kept in
+//! `reference` (test builds), and a test asserts both build identical octrees.
 //!
 //! Debug builds then run [`Octree::validate`] and return its error.
 
@@ -25,13 +37,20 @@ use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree
 use crate::payload::Payload;
 use crate::{Error, Result};
 
+#[cfg(test)]
+pub(crate) mod reference;
+
+/// Items per rayon task below which splitting does not pay.
+const MIN_LEN: usize = 2048;
+
 /// Occupied nodes of one level: sorted Morton codes and their payloads.
 struct Occupied<P> {
     codes: Vec<u64>,
     payload: Vec<P>,
-    /// Per node (above level 0): bit `d` (`d = x + 2y + 4z ∈ {0,1}³`) set if the node minus `d`
-    /// is the parent of a backward neighbour of one of its occupied children ([`tile_parents`]).
-    shifts: Vec<u8>,
+    /// Per node (above level 0): bit `k` set if child `k` is occupied.
+    mask: Vec<u8>,
+    /// Per node (above level 0): index of its first occupied child in the level below.
+    first: Vec<u32>,
 }
 
 impl<P: Payload> Octree<P> {
@@ -92,46 +111,65 @@ impl<P: Payload> Octree<P> {
         grid.validate()?;
         let (depth, first_dense) = plan(grid.dims, options)?;
         check_input(grid.dims, &voxels)?;
+        if voxels.len() as u64 >= NONE as u64 {
+            return Err(Error::TooManyNodes { level: 0, nodes: voxels.len() as u64 });
+        }
         let voxel_count = voxels.len() as u64;
         let (codes, payload) = voxels.into_iter().unzip();
-        let mut occupied = vec![Occupied { codes, payload, shifts: Vec::new() }];
+        let mut occupied = vec![Occupied { codes, payload, mask: Vec::new(), first: Vec::new() }];
         for l in 1..=depth as usize {
             let next = coarsen(&occupied[l - 1]);
             occupied.push(next);
         }
-        // Tiles of each sparse level: parents of the backward closure.
-        let tiles: Vec<Vec<u64>> =
-            occupied[1..=first_dense as usize].par_iter().map(tile_parents).collect();
-        for (l, t) in tiles.iter().enumerate() {
-            let nodes = 8 * t.len() as u64;
-            if nodes >= NONE as u64 {
-                return Err(Error::TooManyNodes { level: l as u32, nodes });
-            }
-        }
-        let mut levels: Vec<Level<P>> = (0..=depth)
+        let fd = first_dense as usize;
+        let mut levels: Vec<Level<P>> = (0..=depth as usize)
             .into_par_iter()
             .map(|l| {
-                let res_log2 = depth - l;
-                // The level below and its tiles' parents, where this level has child pointers.
-                let below = l.checked_sub(1).and_then(|b| {
-                    tiles.get(b as usize).map(|t| (&occupied[b as usize], t.as_slice()))
-                });
-                if l >= first_dense {
-                    dense_level(res_log2, &occupied[l as usize], below)
+                let res_log2 = depth - l as u32;
+                if l >= fd {
+                    dense_level(res_log2, &occupied[l])
                 } else {
-                    sparse_level(res_log2, &occupied[l as usize], &tiles[l as usize], below)
+                    let empty = Vec::new();
+                    Level {
+                        res_log2,
+                        dense: false,
+                        payload: empty,
+                        child: Vec::new(),
+                        mask: Vec::new(),
+                        links: Vec::new(),
+                    }
                 }
             })
             .collect();
-        for l in (0..first_dense as usize).rev() {
+        // Occupied index per node of the level above the one being built (NONE: unoccupied).
+        let mut occ_above =
+            if fd >= 1 { dense_occupancy(&levels[fd], &occupied[fd]) } else { vec![] };
+        for l in (0..fd).rev() {
             let (lower, upper) = levels.split_at_mut(l + 1);
-            lower[l].links = links(&lower[l], &upper[0]);
-        }
-        for level in &mut levels {
-            level.payload.shrink_to_fit();
-            level.child.shrink_to_fit();
-            level.mask.shrink_to_fit();
-            level.links.shrink_to_fit();
+            let (level, parent) = (&mut lower[l], &mut upper[0]);
+            let (occ, occ_parent) = (&occupied[l], &occupied[l + 1]);
+            let tiles = if parent.dense {
+                dense_tile_parents(parent, occ_parent)
+            } else {
+                sparse_tile_parents(parent, &occ_above, occ_parent)
+            };
+            let nodes = 8 * tiles.len() as u64;
+            if nodes >= NONE as u64 {
+                return Err(Error::TooManyNodes { level: l as u32, nodes });
+            }
+            parent.child = vec![NONE; parent.payload.len()];
+            for (rank, &p) in tiles.iter().enumerate() {
+                parent.child[p as usize] = 8 * rank as u32;
+            }
+            parent.mask = occ_above
+                .par_iter()
+                .with_min_len(MIN_LEN)
+                .map(|&g| if g == NONE { 0 } else { occ_parent.mask[g as usize] })
+                .collect();
+            let (payload, occ_here) = fill_tiles(&tiles, &occ_above, occ_parent, occ, l > 0);
+            level.payload = payload;
+            level.links = links(&tiles, parent);
+            occ_above = occ_here;
         }
         let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
         if cfg!(debug_assertions) {
@@ -161,48 +199,59 @@ pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
     Ok((depth, depth - options.dense_log2.min(depth)))
 }
 
-/// Checks the input in order, so the error names the first bad voxel.
+/// Checks the input, so the error names the first bad voxel.
 fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
-    voxels.iter().enumerate().try_for_each(|(i, &(code, ref p))| {
+    let problem = |i: usize| -> Option<Error> {
+        let (code, ref p) = voxels[i];
         let coord = morton::decode(code);
         if code >> 63 != 0 || !coord.cmplt(dims).all() {
-            return Err(Error::OutOfBounds { coord, dims });
+            return Some(Error::OutOfBounds { coord, dims });
         }
         if i > 0 {
             let prev = voxels[i - 1].0;
             if prev == code {
-                return Err(Error::DuplicateVoxel { coord });
+                return Some(Error::DuplicateVoxel { coord });
             }
             if prev > code {
-                return Err(Error::OutOfOrder { coord, code });
+                return Some(Error::OutOfOrder { coord, code });
             }
         }
-        match p.check() {
-            Some(reason) => Err(Error::InvalidPayload { coord, reason }),
-            None => Ok(()),
-        }
-    })
+        p.check().map(|reason| Error::InvalidPayload { coord, reason })
+    };
+    let first_bad = (0..voxels.len())
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .find_first(|&i| problem(i).is_some());
+    match first_bad.and_then(problem) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
 }
 
-/// The occupied nodes one level up: distinct parents, each the prefilter of its children.
+/// The occupied nodes one level up: distinct parents, each the prefilter of its children, with
+/// their children's mask and first index.
 fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
     let c = &level.codes;
-    let starts: Vec<usize> =
-        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).collect();
-    let (codes, (payload, shifts)) = (0..starts.len())
+    let starts: Vec<u32> =
+        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).map(|i| i as u32).collect();
+    let codes = starts.par_iter().with_min_len(MIN_LEN).map(|&s| c[s as usize] >> 3).collect();
+    // Exact-length outputs (an indexed unzip), not vectors grown chunk by chunk.
+    let (mut payload, mut mask) = (Vec::new(), Vec::new());
+    (0..starts.len())
         .into_par_iter()
+        .with_min_len(MIN_LEN)
         .map(|g| {
-            let end = starts.get(g + 1).copied().unwrap_or(c.len());
+            let end = starts.get(g + 1).map_or(c.len(), |&e| e as usize);
             let mut children = [P::empty(); 8];
-            let mut shifts = 0u8;
-            for i in starts[g]..end {
+            let mut mask = 0u8;
+            for i in starts[g] as usize..end {
                 children[(c[i] & 7) as usize] = level.payload[i];
-                shifts |= SUBSETS[(!c[i] & 7) as usize];
+                mask |= 1 << (c[i] & 7);
             }
-            (c[starts[g]] >> 3, (P::prefilter(&children), shifts))
+            (P::prefilter(&children), mask)
         })
-        .unzip();
-    Occupied { codes, payload, shifts }
+        .unzip_into_vecs(&mut payload, &mut mask);
+    Occupied { codes, payload, mask, first: starts }
 }
 
 /// `SUBSETS[m]`: bit `d` set for every `d ⊆ m` (3-bit sets).
@@ -222,128 +271,198 @@ const SUBSETS: [u8; 8] = {
     t
 };
 
-/// Codes of the parents of the backward closure of a level, sorted and distinct, from the
-/// occupied nodes one level up (`parents`). Child `o = 2q + b` of `q` has backward neighbours
-/// `o − d` whose parents are `q − d'` with `d'_a = d_a` where `b_a = 0` and `d'_a = 0` where
-/// `b_a = 1`: `d'` ranges over the subsets of the axes along which `o` is in the lower half.
-/// `Occupied::shifts` holds the union of those over the occupied children, so this enumerates
-/// the exact set from about a quarter as many nodes (on surfaces) as the children's closure.
-fn tile_parents<P>(parents: &Occupied<P>) -> Vec<u64> {
-    let mut out: Vec<u64> = parents
-        .codes
-        .par_iter()
-        .zip(&parents.shifts)
-        .flat_map_iter(|(&code, &shifts)| {
-            let q = morton::decode(code);
-            (0..8u32).filter_map(move |d| {
-                let e = UVec3::new(d & 1, d >> 1 & 1, d >> 2 & 1);
-                (shifts >> d & 1 == 1 && q.cmpge(e).all()).then(|| morton::encode(q - e))
-            })
-        })
-        .collect();
-    out.par_sort_unstable();
-    out.dedup();
-    out
-}
-
-/// Node indices, in a tiled level whose tiles' parents are `tiles`, of sorted `codes` that all
-/// lie in those tiles.
-fn locate(tiles: &[u64], codes: impl Iterator<Item = u64>) -> impl Iterator<Item = usize> {
-    let mut t = 0;
-    codes.map(move |code| {
-        while tiles[t] < code >> 3 {
-            t += 1;
+/// `SHIFTS[mask]`: for an occupied node `q` whose occupied children are `mask`, bit `d` set if
+/// `q − d` is the parent of a backward neighbour of one of them. Child `o = 2q + b` has backward
+/// neighbours `o − e` whose parents are `q − d` with `d_a = e_a` where `b_a = 0` and `d_a = 0`
+/// where `b_a = 1`: `d` ranges over the subsets of the axes along which `b` is 0.
+const SHIFTS: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut m = 0;
+    while m < 256 {
+        let mut b = 0;
+        while b < 8 {
+            if m >> b & 1 == 1 {
+                t[m] |= SUBSETS[!b & 7];
+            }
+            b += 1;
         }
-        debug_assert_eq!(tiles[t], code >> 3, "code {code} lies in no tile");
-        8 * t + (code & 7) as usize
-    })
+        m += 1;
+    }
+    t
+};
+
+/// The Morton-code bits of axis `a` (x: bits 0, 3, 6, …).
+const AXIS_BITS: [u64; 3] =
+    [0x1249_2492_4924_9249, 0x1249_2492_4924_9249 << 1, 0x1249_2492_4924_9249 << 2];
+
+/// The code one step down axis `a`, or `None` at coordinate 0. No decode.
+#[inline]
+pub(crate) fn morton_dec(code: u64, a: usize) -> Option<u64> {
+    let m = AXIS_BITS[a];
+    let field = code & m;
+    (field != 0).then_some((field.wrapping_sub(1) & m) | (code & !m))
 }
 
-/// A dense level; `below` (finest dense level only, above level 0) gives the occupied nodes and
-/// tile parents of the level under it, for child pointers and masks.
-fn dense_level<P: Payload>(
-    res_log2: u32,
-    occupied: &Occupied<P>,
-    below: Option<(&Occupied<P>, &[u64])>,
-) -> Level<P> {
+/// The code one step up axis `a` at resolution `2^res_log2` (≤ 21), or `None` past the edge.
+#[inline]
+pub(crate) fn morton_inc(code: u64, a: usize, res_log2: u32) -> Option<u64> {
+    let m = AXIS_BITS[a];
+    // The field of coordinate `2^res_log2 − 1`: every axis bit below bit 3·res_log2.
+    if code & m == m & ((1u64 << (3 * res_log2)) - 1) {
+        return None;
+    }
+    Some(((code | !m).wrapping_add(1)) & m | (code & !m))
+}
+
+/// A dense level: every payload, indexed by Morton code (child pointers and masks of the
+/// finest dense level are set when the level below is built).
+fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<P>) -> Level<P> {
     let n = 1usize << (3 * res_log2);
     let mut payload = vec![P::empty(); n];
     for (&c, p) in occupied.codes.iter().zip(&occupied.payload) {
         payload[c as usize] = *p;
     }
-    let (mut child, mut mask) = (Vec::new(), Vec::new());
-    if let Some((occ_below, tiles_below)) = below {
-        child = vec![NONE; n];
-        mask = vec![0u8; n];
-        for (rank, &q) in tiles_below.iter().enumerate() {
-            child[q as usize] = 8 * rank as u32;
-        }
-        for &c in &occ_below.codes {
-            mask[(c >> 3) as usize] |= 1 << (c & 7);
-        }
-    }
-    Level { res_log2, dense: true, payload, child, mask, links: Vec::new() }
+    Level { res_log2, dense: true, payload, child: Vec::new(), mask: Vec::new(), links: Vec::new() }
 }
 
-/// A sparse level made of the tiles of `tiles` (parents' codes); `below` as for
-/// [`dense_level`].
-fn sparse_level<P: Payload>(
-    res_log2: u32,
+/// Occupied index per node of a dense level.
+fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+    let mut occ = vec![NONE; level.payload.len()];
+    for (g, &c) in occupied.codes.iter().enumerate() {
+        occ[c as usize] = g as u32;
+    }
+    occ
+}
+
+/// Tile parents (node indices, ascending) under a dense level: each occupied node `q` marks
+/// `q − d` for `d ∈ SHIFTS[mask]`.
+fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+    let mut marked = vec![false; level.payload.len()];
+    for (&q, &m) in occupied.codes.iter().zip(&occupied.mask) {
+        let s = SHIFTS[m as usize];
+        for d in 0..8usize {
+            if s >> d & 1 == 0 {
+                continue;
+            }
+            let c =
+                (0..3).try_fold(q, |c, a| if d >> a & 1 == 1 { morton_dec(c, a) } else { Some(c) });
+            if let Some(c) = c {
+                marked[c as usize] = true;
+            }
+        }
+    }
+    (0..marked.len() as u32).filter(|&i| marked[i as usize]).collect()
+}
+
+/// Tile parents (node indices, ascending) under a sparse level with links: node `n` is one iff
+/// a corner `n + d` (reached by forward links) is occupied with `d ∈ SHIFTS[its mask]`.
+fn sparse_tile_parents<P: Payload>(
+    level: &Level<P>,
+    occ: &[u32],
     occupied: &Occupied<P>,
-    tiles: &[u64],
-    below: Option<(&Occupied<P>, &[u64])>,
-) -> Level<P> {
-    let n = 8 * tiles.len();
-    let mut payload = vec![P::empty(); n];
-    for (i, p) in locate(tiles, occupied.codes.iter().copied()).zip(&occupied.payload) {
-        payload[i] = *p;
-    }
-    let (mut child, mut mask) = (Vec::new(), Vec::new());
-    if let Some((occ_below, tiles_below)) = below {
-        child = vec![NONE; n];
-        mask = vec![0u8; n];
-        for (rank, i) in locate(tiles, tiles_below.iter().copied()).enumerate() {
-            child[i] = 8 * rank as u32;
+) -> Vec<u32> {
+    let links = &level.links;
+    let hit = |i: u32, d: u32| {
+        i != NONE && {
+            let g = occ[i as usize];
+            g != NONE && SHIFTS[occupied.mask[g as usize] as usize] >> d & 1 == 1
         }
-        let parents = occ_below.codes.iter().map(|c| c >> 3);
-        for (i, &c) in locate(tiles, parents).zip(&occ_below.codes) {
-            mask[i] |= 1 << (c & 7);
-        }
-    }
-    Level { res_log2, dense: false, payload, child, mask, links: Vec::new() }
+    };
+    let hop = |i: u32, a: usize| if i == NONE { NONE } else { links[i as usize][a] };
+    (0..occ.len() as u32)
+        .into_par_iter()
+        .with_min_len(MIN_LEN)
+        .filter(|&n| {
+            if hit(n, 0) {
+                return true;
+            }
+            let [x, y, z] = links[n as usize];
+            let (xy, xz, yz) = (hop(x, 1), hop(x, 2), hop(y, 2));
+            hit(x, 1)
+                || hit(y, 2)
+                || hit(z, 4)
+                || hit(xy, 3)
+                || hit(xz, 5)
+                || hit(yz, 6)
+                || hit(hop(xy, 2), 7)
+        })
+        .collect()
 }
 
-/// Forward links of a sparse level from its parent level (links already built if sparse).
-fn links<P: Payload>(level: &Level<P>, parent: &Level<P>) -> Vec<[u32; 3]> {
-    let mut tile_parent = vec![NONE; level.payload.len() / 8];
-    for (p, &c) in parent.child.iter().enumerate() {
-        if c != NONE {
-            tile_parent[c as usize / 8] = p as u32;
+/// Payloads of the tiles under `tiles` (node indices of the level above, whose occupied index
+/// per node is `occ_above`), and, if `with_occupancy`, the occupied index per node of this level.
+/// Each array is written once, in parallel, without a fill pass.
+fn fill_tiles<P: Payload>(
+    tiles: &[u32],
+    occ_above: &[u32],
+    above: &Occupied<P>,
+    here: &Occupied<P>,
+    with_occupancy: bool,
+) -> (Vec<P>, Vec<u32>) {
+    // Node 8t + k is occupied iff bit k of its parent's mask is; its index in `here` is the
+    // parent's first child plus the occupied siblings before it.
+    let occupied_index = |i: usize| -> u32 {
+        let g = occ_above[tiles[i / 8] as usize];
+        if g == NONE {
+            return NONE;
         }
+        let (m, k) = (above.mask[g as usize] as u32, i % 8);
+        if m >> k & 1 == 0 {
+            NONE
+        } else {
+            above.first[g as usize] + (m & ((1 << k) - 1)).count_ones()
+        }
+    };
+    let n = 8 * tiles.len();
+    let payload_of = |j: u32| if j == NONE { P::empty() } else { here.payload[j as usize] };
+    if with_occupancy {
+        let occ: Vec<u32> =
+            (0..n).into_par_iter().with_min_len(MIN_LEN).map(occupied_index).collect();
+        let payload = occ.par_iter().with_min_len(MIN_LEN).map(|&j| payload_of(j)).collect();
+        (payload, occ)
+    } else {
+        let payload = (0..n)
+            .into_par_iter()
+            .with_min_len(MIN_LEN)
+            .map(|i| payload_of(occupied_index(i)))
+            .collect();
+        (payload, Vec::new())
     }
-    let parent_res = 1u32 << parent.res_log2;
-    (0..level.payload.len())
+}
+
+/// Forward links of the sparse level under `tiles` (node indices of `parent`, whose child
+/// pointers are set and, if sparse, links built).
+fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
+    let neighbour = |p: u32, a: usize| -> u32 {
+        let q = if parent.dense {
+            morton_inc(p as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+        } else {
+            parent.links[p as usize][a]
+        };
+        if q == NONE { NONE } else { parent.child[q as usize] }
+    };
+    let tile_links: Vec<[u32; 3]> = tiles
+        .par_iter()
+        .with_min_len(MIN_LEN / 8)
+        .map(|&p| std::array::from_fn(|a| neighbour(p, a)))
+        .collect();
+    (0..8 * tiles.len())
         .into_par_iter()
+        .with_min_len(MIN_LEN)
         .map(|i| {
             let (t, k) = (i / 8, (i % 8) as u32);
-            let p = tile_parent[t];
-            std::array::from_fn(|a| {
+            let (base, tl) = (8 * t as u32, &tile_links[t]);
+            let link = |a: usize| {
                 let bit = 1 << a;
                 if k & bit == 0 {
-                    return (8 * t) as u32 + (k | bit);
-                }
-                let q = if parent.dense {
-                    let mut c = morton::decode(p as u64);
-                    c[a] += 1;
-                    if c[a] < parent_res { morton::encode(c) as u32 } else { NONE }
+                    base + (k | bit)
+                } else if tl[a] == NONE {
+                    NONE
                 } else {
-                    parent.links[p as usize][a]
-                };
-                match parent.child.get(q as usize) {
-                    Some(&ch) if ch != NONE => ch + (k & !bit),
-                    _ => NONE,
+                    tl[a] + (k & !bit)
                 }
-            })
+            };
+            [link(0), link(1), link(2)]
         })
         .collect()
 }

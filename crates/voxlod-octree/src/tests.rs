@@ -3,6 +3,7 @@
 //! bad input).
 
 mod extremes;
+mod fast_build;
 mod invariants;
 mod oracle;
 

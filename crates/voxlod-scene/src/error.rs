@@ -115,6 +115,18 @@ pub enum Error {
         /// The valid range or why it is wrong.
         reason: String,
     },
+    /// A particle of a procedural volume has a non-finite or out-of-range field.
+    #[error("particle {index}: {field} = {value}: {reason}")]
+    InvalidParticle {
+        /// Index of the particle in its system.
+        index: usize,
+        /// The field at fault (`center`, `radius`, `density`…).
+        field: &'static str,
+        /// Its value, as given.
+        value: String,
+        /// The valid range.
+        reason: &'static str,
+    },
     /// A file type this crate does not load.
     #[error("{path}: unsupported scene file (expected .obj, .gltf or .glb)")]
     UnsupportedFormat {

@@ -1,7 +1,7 @@
 //! Scene inputs for voxlod: triangle [`Mesh`]es in world space, [`Material`]s with
 //! [`Texture`]s, a pinhole [`Camera`], [`Light`]s, the background colour, and float/8-bit
 //! [`image`]s; loaders for OBJ+MTL ([`obj`]) and glTF 2.0 ([`gltf`]); deterministic procedural
-//! scenes ([`procedural`]).
+//! scenes ([`procedural`]); displaced-sphere particles for procedural volumes ([`particles`]).
 //!
 //! Conventions (the CPU↔GPU contract): right-handed, y up; colours are linear RGB unless a name
 //! says sRGB; texture coordinates have their origin at the image's top-left corner, v pointing
@@ -18,6 +18,7 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod obj;
+pub mod particles;
 pub mod procedural;
 pub mod scene;
 pub mod texture;

@@ -49,7 +49,9 @@ use voxlod_scene::LightSample;
 use super::sampler::SamplingContext;
 use super::samples::VoxelSamples;
 use super::vmesh::VirtualMeshParams;
-use super::{Appearance, Opacity, RecordAppearance, averages, precompute, sggx, vmesh};
+use super::{
+    Appearance, Opacity, RecordAppearance, averages, precompute, sggx, subgrid, vjk, vmesh,
+};
 use crate::{Error, Result};
 
 /// Default number of held-out rays per voxel.
@@ -262,8 +264,11 @@ impl Candidates {
                 |(fit, held), i| {
                     ctx.sample_voxel_seeded(i, options.seed, 0, options.rays, fit);
                     let average = averages::fit(fit)?;
-                    let sggx = sggx::fit(fit)?;
-                    let vmesh = vmesh::fit(fit)?;
+                    // One SGGX estimate for both records (what `sggx::fit` and `vmesh::fit`
+                    // would each compute).
+                    let estimate = sggx::estimate_samples(fit)?;
+                    let sggx = sggx::record(fit, &estimate, vjk::fit(&fit.rays));
+                    let vmesh = vmesh::fit_with(fit, &estimate, subgrid::build(fit));
                     let spec = specular.then(|| precompute::specular_record(fit));
                     ctx.sample_voxel_seeded(i, options.seed, options.rays, options.heldout, held);
                     let h = HeldOut::new(held);
@@ -462,6 +467,16 @@ impl Appearance for AdaptiveGrid {
             Kind::VirtualMesh => {
                 self.vmesh[i].radiance(self.rule, s, to_viewer, light, visibility, ambient)
             }
+        }
+    }
+
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        let r = self.tag(index);
+        let i = r.index() as usize;
+        match r.kind() {
+            Kind::Average => self.averages[i].needs_visibility((), to_viewer, light),
+            Kind::Sggx => self.sggx[i].needs_visibility((), to_viewer, light),
+            Kind::VirtualMesh => self.vmesh[i].needs_visibility(self.rule, to_viewer, light),
         }
     }
 }

@@ -74,13 +74,27 @@ impl RecordAppearance for AverageRecord {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        let mut n = self.normal();
-        if n == Vec3::ZERO {
-            n = to_viewer;
-        } else if n.dot(to_viewer) < 0.0 {
-            n = -n;
-        }
+        let n = shading_normal(self.normal(), to_viewer);
         shade(&record_material(self.color(), specular), n, to_viewer, light, visibility, ambient)
+    }
+
+    /// The shading normal faces away from the light: [`shade`]'s direct and specular terms
+    /// are `max(n·l, 0) = 0` times the visibility.
+    fn needs_visibility(&self, _: (), to_viewer: Vec3, light: &LightSample) -> bool {
+        shading_normal(self.normal(), to_viewer).dot(light.to_light) > 0.0
+    }
+}
+
+/// The normal an Averages record shades with: its mean normal turned toward the viewer (two
+/// sided), or the direction to the viewer where it has none.
+#[inline]
+fn shading_normal(n: Vec3, to_viewer: Vec3) -> Vec3 {
+    if n == Vec3::ZERO {
+        to_viewer
+    } else if n.dot(to_viewer) < 0.0 {
+        -n
+    } else {
+        n
     }
 }
 
@@ -195,6 +209,37 @@ mod tests {
 
     /// Two-sided shading: the normal is flipped toward the viewer, so a voxel seen from behind
     /// shades like its mirror seen from the front; opacity ignores the direction.
+    #[test]
+    fn a_voxel_facing_away_from_the_light_does_not_need_its_visibility() {
+        use crate::random::rand_f32;
+        let dir = |i: u32, k: u32| {
+            Vec3::new(rand_f32(i, k, 0), rand_f32(i, k, 1), rand_f32(i, k, 2)) * 2.0 - 1.0
+        };
+        let (mut skipped, mut needed) = (0, 0);
+        for i in 0..2000u32 {
+            let record = AverageRecord::new(Vec3::new(0.2, 0.5, 0.9), dir(i, 0), 0.7);
+            let g = grid_of(record, None);
+            let to_viewer = dir(i, 1).normalize();
+            let light = LightSample {
+                to_light: dir(i, 2).normalize(),
+                distance: f32::INFINITY,
+                irradiance: Vec3::splat(2.0),
+            };
+            let shaded = |v: f32| g.radiance(0, to_viewer, &light, v, Vec3::splat(0.1));
+            if g.needs_visibility(0, to_viewer, &light) {
+                needed += 1;
+                assert_ne!(shaded(0.0), shaded(1.0), "voxel {i}: lit, so visibility matters");
+            } else {
+                skipped += 1;
+                for v in [0.0, 0.3, 1.0] {
+                    assert_eq!(shaded(v).to_array(), shaded(1.0).to_array(), "voxel {i}");
+                }
+            }
+        }
+        // Random normals, viewers and lights: about half face away from the light.
+        assert!(skipped > 600 && needed > 600, "{skipped} skipped, {needed} needed");
+    }
+
     #[test]
     fn radiance_is_two_sided_and_uses_shade() {
         let g = grid_of(AverageRecord::new(Vec3::splat(0.5), Vec3::Z, 0.6), None);

@@ -115,6 +115,16 @@ pub trait Appearance: Sync {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3;
+
+    /// Whether [`Appearance::radiance`] of voxel `index` for this viewer and light can depend
+    /// on `visibility`. `false` promises that the direct term is exactly zero (every normal
+    /// the voxel shades with faces away from the light), so the result is the same, bit for
+    /// bit, for every visibility, and a renderer may skip the shadow ray. The default, `true`,
+    /// is always correct.
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        let _ = (index, to_viewer, light);
+        true
+    }
 }
 
 /// The per-voxel half of [`Appearance`]: what one record answers on its own, given the
@@ -139,6 +149,13 @@ pub trait RecordAppearance: Copy + Send + Sync {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3;
+
+    /// As [`Appearance::needs_visibility`]: `false` only when [`RecordAppearance::radiance`]
+    /// does not depend on the visibility. The default, `true`, is always correct.
+    fn needs_visibility(&self, params: Self::Params, to_viewer: Vec3, light: &LightSample) -> bool {
+        let _ = (params, to_viewer, light);
+        true
+    }
 }
 
 /// The material a record shades with: its albedo, and the specular side record if any.
@@ -183,5 +200,9 @@ impl<R: RecordAppearance<Params = ()>> Appearance for AppearanceGrid<R> {
     ) -> Vec3 {
         let specular = self.specular.as_ref().map(|s| &s[index]);
         self.records.values()[index].radiance((), specular, to_viewer, light, visibility, ambient)
+    }
+
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        self.records.values()[index].needs_visibility((), to_viewer, light)
     }
 }

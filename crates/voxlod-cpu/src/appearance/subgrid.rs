@@ -46,7 +46,9 @@ pub const CIRCLE_RADIUS: f32 = 0.9 * 0.288_675_13;
 /// `clamp(⌊3p⌋, 0, 2)`: exactly one cell, also on shared faces and outside the voxel.
 #[inline]
 pub fn subcell_of(p: Vec3) -> usize {
-    let c = |v: f32| ((3.0 * v).floor() as i32).clamp(0, 2) as usize;
+    // Truncation equals `floor` wherever the clamp keeps the result (`floor` is a libm call
+    // on targets without SSE4.1); NaN gives 0 either way.
+    let c = |v: f32| ((3.0 * v) as i32).clamp(0, 2) as usize;
     c(p.x) + 3 * c(p.y) + 9 * c(p.z)
 }
 
@@ -73,7 +75,8 @@ pub fn crossed_subcells(entry: Vec3, d: Vec3, chord: f32) -> u32 {
     for j in 0..3 {
         let inv = 1.0 / d[j];
         let t = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0].map(|b: f32| (b - e[j]) * inv);
-        let home = ((3.0 * e[j]).floor() as i32).clamp(0, 2) as usize;
+        // `⌊3e⌋` clamped to 0..=2, by truncation (equal under the clamp, see `subcell_of`).
+        let home = ((3.0 * e[j]) as i32).clamp(0, 2) as usize;
         for s in 0..3 {
             let (a, b) = (t[s], t[s + 1]);
             // A line that does not move along axis j stays in its home slab for all t.

@@ -375,6 +375,10 @@ impl Appearance for VirtualMeshGrid {
         let p = self.params();
         self.grid.records.values()[index].radiance(p, spec, to_viewer, light, visibility, ambient)
     }
+
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        self.grid.records.values()[index].needs_visibility(self.params(), to_viewer, light)
+    }
 }
 
 #[cfg(test)]

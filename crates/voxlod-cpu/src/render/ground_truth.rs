@@ -114,21 +114,7 @@ pub fn render(
     options: &Options,
 ) -> Result<GroundTruth> {
     let Options { width, height, spp, seed, ambient, shadows } = *options;
-    check_image_size(width, height)?;
-    if spp == 0 {
-        return Err(Error::InvalidParameter {
-            name: "spp",
-            value: "0".into(),
-            reason: "at least one ray per pixel".into(),
-        });
-    }
-    if !(ambient.is_finite() && ambient.min_element() >= 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "ambient",
-            value: ambient.to_string(),
-            reason: "must be finite and non-negative".into(),
-        });
-    }
+    check_options(options)?;
     camera.validate()?;
     let tracer = MeshTracer::new(scene, geometry, bvh)?;
     let frame = camera.frame(width, height);
@@ -177,6 +163,43 @@ pub fn render(
         },
     );
     Ok(GroundTruth { image, gbuffer: GBuffer { width, height, texels } })
+}
+
+/// Checks what [`render`] checks before it renders — the options, the camera, and that
+/// `scene`, `geometry` and `bvh` belong together with a valid light — so that another backend
+/// (voxlod-gpu's ground-truth kernel) refuses bad input with the same errors.
+pub fn validate(
+    scene: &Scene,
+    geometry: &Geometry,
+    bvh: &Bvh,
+    camera: &Camera,
+    options: &Options,
+) -> Result<()> {
+    check_options(options)?;
+    camera.validate()?;
+    MeshTracer::new(scene, geometry, bvh)?;
+    Ok(())
+}
+
+/// The image size, `spp` and ambient checks of [`render`] (an error naming the parameter).
+pub fn check_options(options: &Options) -> Result<()> {
+    let Options { width, height, spp, ambient, .. } = *options;
+    check_image_size(width, height)?;
+    if spp == 0 {
+        return Err(Error::InvalidParameter {
+            name: "spp",
+            value: "0".into(),
+            reason: "at least one ray per pixel".into(),
+        });
+    }
+    if !(ambient.is_finite() && ambient.min_element() >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "ambient",
+            value: ambient.to_string(),
+            reason: "must be finite and non-negative".into(),
+        });
+    }
+    Ok(())
 }
 
 /// The G-buffer alone, from one ray through each pixel centre (coverage 0 or 1): the cheap

@@ -166,17 +166,18 @@ impl<T: Wide> PlaneSpan<T> {
             let m = w(H, n.abs().max_element());
             (-m, m)
         } else {
-            let nv = n * V;
-            let min = T::of(nv.x.min(0)) + T::of(nv.y.min(0)) + T::of(nv.z.min(0));
-            let max = T::of(nv.x.max(0)) + T::of(nv.y.max(0)) + T::of(nv.z.max(0));
+            // n·VOXEL in `T`: |n| reaches 2^59 for triangles across the whole lattice, and
+            // n·VOXEL (2^67) does not fit an i64 (issue 4's equivalence suite found this).
+            let min = w(n.x.min(0), V) + w(n.y.min(0), V) + w(n.z.min(0), V);
+            let max = w(n.x.max(0), V) + w(n.y.max(0), V) + w(n.z.max(0), V);
             if n.z > 0 { (min, max) } else { (-max, -min) }
         };
         PlaneSpan {
             origin,
-            ca: s * T::of(n.x * V),
-            cb: s * T::of(n.y * V),
+            ca: s * w(n.x, V),
+            cb: s * w(n.y, V),
             c0: s * c0,
-            d: T::of(n.z.abs() * V),
+            d: w(n.z.abs(), V),
             lo,
             hi,
         }

@@ -33,7 +33,13 @@ use voxlod_scene::camera::CameraFrame;
 use crate::{Context, Result};
 
 /// The WGSL source of the kernel.
-pub const WGSL: &str = include_str!("raycast.wgsl");
+/// The WGSL source of the kernel: the shared traversal (`bvh.wgsl`, also used by the
+/// ground-truth kernel) followed by the entry point.
+pub const WGSL: &str = concat!(include_str!("../bvh.wgsl"), include_str!("raycast.wgsl"));
+
+/// The WGSL of the BVH traversal alone (structs `Node`, `Tri`, `Hit`, bindings 1 and 2, and
+/// `fn trace(origin, dir, t_min, t_max, any_hit) -> Hit`), for kernels that cast rays.
+pub const BVH_WGSL: &str = include_str!("../bvh.wgsl");
 
 /// Rays per dispatch (a bound on a dispatch's duration on real GPUs).
 pub const RAYS_PER_DISPATCH: u64 = 1 << 22;
@@ -218,9 +224,32 @@ pub fn primary_rays(frame: &CameraFrame) -> Vec<GpuRay> {
 
 /// A BVH uploaded to one device.
 pub struct GpuBvh {
-    nodes: wgpu::Buffer,
-    tris: wgpu::Buffer,
+    pub(crate) nodes: wgpu::Buffer,
+    pub(crate) tris: wgpu::Buffer,
     node_count: u32,
+}
+
+/// Uploads `bvh`, built from `geometry`, to `ctx`'s device (checked against the buffer
+/// limits); an error if `bvh` was built from another geometry.
+pub fn upload_bvh(ctx: &Context, bvh: &Bvh, geometry: &Geometry) -> Result<GpuBvh> {
+    if bvh.triangle_count() != geometry.triangle_count() {
+        return Err(voxlod_cpu::Error::InvalidParameter {
+            name: "bvh",
+            value: format!("{} triangles", bvh.triangle_count()),
+            reason: format!(
+                "built from another geometry (this one has {} triangles)",
+                geometry.triangle_count()
+            ),
+        }
+        .into());
+    }
+    let nodes = gpu_nodes(bvh);
+    let tris = gpu_tris(bvh, geometry);
+    Ok(GpuBvh {
+        nodes: ctx.storage_init("BVH nodes", bytemuck::cast_slice(&nodes))?,
+        tris: ctx.storage_init("BVH triangles", bytemuck::cast_slice(&tris))?,
+        node_count: nodes.len() as u32,
+    })
 }
 
 /// The ray casting kernel, compiled for one [`Context`].
@@ -235,26 +264,9 @@ impl<'a> RayCaster<'a> {
         Ok(Self { ctx, pipeline: ctx.pipeline("raycast", WGSL)? })
     }
 
-    /// Uploads `bvh`, built from `geometry` (checked against the device's buffer limits).
+    /// Uploads `bvh`, built from `geometry` (see [`upload_bvh`]).
     pub fn upload(&self, bvh: &Bvh, geometry: &Geometry) -> Result<GpuBvh> {
-        if bvh.triangle_count() != geometry.triangle_count() {
-            return Err(voxlod_cpu::Error::InvalidParameter {
-                name: "bvh",
-                value: format!("{} triangles", bvh.triangle_count()),
-                reason: format!(
-                    "built from another geometry (this one has {} triangles)",
-                    geometry.triangle_count()
-                ),
-            }
-            .into());
-        }
-        let nodes = gpu_nodes(bvh);
-        let tris = gpu_tris(bvh, geometry);
-        Ok(GpuBvh {
-            nodes: self.ctx.storage_init("BVH nodes", bytemuck::cast_slice(&nodes))?,
-            tris: self.ctx.storage_init("BVH triangles", bytemuck::cast_slice(&tris))?,
-            node_count: nodes.len() as u32,
-        })
+        upload_bvh(self.ctx, bvh, geometry)
     }
 
     /// Closest hits of `rays` (in order), in dispatches of at most [`RAYS_PER_DISPATCH`].
@@ -299,7 +311,8 @@ impl<'a> RayCaster<'a> {
     }
 }
 
-fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+/// A bind group entry binding all of `buffer`.
+pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 

@@ -37,7 +37,7 @@ pub mod blinds;
 mod builder;
 pub mod forest;
 pub mod island;
-mod noise;
+pub(crate) mod noise;
 mod param;
 pub mod primitives;
 pub mod registry;

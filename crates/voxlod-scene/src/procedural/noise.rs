@@ -67,6 +67,19 @@ pub fn fbm2(seed: u64, p: Vec2, octaves: u32) -> f32 {
     if norm > 0.0 { sum / norm } else { 0.0 }
 }
 
+/// Fractal sum of `octaves` layers of [`value3`], normalized to [−1, 1] like [`fbm2`]: the
+/// displacement of the particles' cube maps.
+pub fn fbm3(seed: u64, p: Vec3, octaves: u32) -> f32 {
+    let (mut sum, mut norm, mut amp, mut freq) = (0.0, 0.0, 1.0, 1.0);
+    for o in 0..octaves {
+        sum += amp * value3(seed.wrapping_add(o as u64), p * freq);
+        norm += amp;
+        amp *= 0.5;
+        freq *= 2.0;
+    }
+    if norm > 0.0 { sum / norm } else { 0.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -83,6 +96,7 @@ mod tests {
             let q = Vec3::new(p.x, p.y, p.x * 0.5);
             assert!((-1.0..=1.0).contains(&value3(9, q)));
             assert!((-1.0..=1.0).contains(&fbm2(9, p, 4)));
+            assert!((-1.0..=1.0).contains(&fbm3(9, q, 4)));
         }
         assert_eq!(value2(5, Vec2::new(3.0, -2.0)), lattice(5, 3, -2, 0));
         assert_eq!(value3(5, Vec3::new(1.0, 2.0, 3.0)), lattice(5, 1, 2, 3));

@@ -149,10 +149,13 @@ impl LightBounds {
             let p = (c.as_dvec3() + 0.5) * s;
             let uv = DVec2::new(p.dot(e1), p.dot(e2));
             let r = DVec2::new(h1, h2) + cell * 1e-3;
-            let (c0, c1) = (((uv - r - lo) / cell).floor(), ((uv + r - lo) / cell).floor());
+            // Cells ⌊(uv ∓ r − lo)/cell⌋ clamped to the map: the saturating truncation of
+            // `as u32` is that floor for the non-negative values and 0 for the negative ones
+            // (`floor` is a libm call on targets without SSE4.1).
+            let (c0, c1) = (((uv - r - lo) / cell).as_uvec2(), ((uv + r - lo) / cell).as_uvec2());
             let w = (p.dot(l) + hw) as f32;
-            for y in c0.y.max(0.0) as u32..=(c1.y as u32).min(dims.y - 1) {
-                for x in c0.x.max(0.0) as u32..=(c1.x as u32).min(dims.x - 1) {
+            for y in c0.y..=c1.y.min(dims.y - 1) {
+                for x in c0.x..=c1.x.min(dims.x - 1) {
                     let t = &mut top[(y * dims.x + x) as usize];
                     *t = t.max(w);
                 }
@@ -172,8 +175,9 @@ impl LightBounds {
     #[inline]
     pub fn t_max(&self, grid: &GridSpec, voxel: glam::UVec3) -> f32 {
         let p = (voxel.as_dvec3() + 0.5) * grid.voxel_size;
-        let c = ((DVec2::new(p.dot(self.e1), p.dot(self.e2)) - self.lo) / self.cell).floor();
-        if c.x < 0.0 || c.y < 0.0 || c.x >= self.dims[0] as f64 || c.y >= self.dims[1] as f64 {
+        let c = (DVec2::new(p.dot(self.e1), p.dot(self.e2)) - self.lo) / self.cell;
+        // Outside the map iff its floor is; inside, truncation is the floor.
+        if !(c.x >= 0.0 && c.y >= 0.0 && c.x < self.dims[0] as f64 && c.y < self.dims[1] as f64) {
             return -1.0;
         }
         let top = self.top[(c.y as u32 * self.dims[0] + c.x as u32) as usize];

@@ -24,7 +24,9 @@
 //!   does. Every other voxel it crosses applies its own opacity for the direction the light
 //!   travels at that voxel's centre (cached per voxel), with the shadow ray's chord; it stops
 //!   at `T < 0.001`. Visibility is cached per voxel and kept across frames while the light
-//!   is unchanged; with `shadows` off every voxel sees the light.
+//!   is unchanged; with `shadows` off every voxel sees the light. A voxel whose radiance
+//!   cannot depend on its visibility ([`Appearance::needs_visibility`]: an Averages voxel
+//!   facing away from the light) traces no shadow ray: the image is the same.
 //! - **Shading.** The representation's [`Appearance::radiance`] for `v`, the light seen from
 //!   the voxel centre, the visibility and the ambient term; every representation shades with
 //!   the one [`crate::shading::shade`].
@@ -134,18 +136,7 @@ fn validate<A: Appearance + ?Sized>(
     background: Vec3,
     options: &Options,
 ) -> Result<Light> {
-    check_image_size(options.width, options.height)?;
-    camera.validate()?;
-    let light = light.validated()?;
-    for (name, v) in [("ambient", options.ambient), ("background", background)] {
-        if !(v.is_finite() && v.min_element() >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name,
-                value: v.to_string(),
-                reason: "must be finite and non-negative".into(),
-            });
-        }
-    }
+    let light = check_frame(camera, light, background, options)?;
     let app = cache.appearance();
     if app.grid() != cache.grid() || app.len() != cache.slots_len() {
         return Err(Error::InvalidParameter {
@@ -157,6 +148,30 @@ fn validate<A: Appearance + ?Sized>(
                 cache.slots_len()
             ),
         });
+    }
+    Ok(light)
+}
+
+/// The checks of a frame that do not depend on the appearance: image size, camera, light,
+/// ambient term and background (finite, non-negative). Returns the validated light. Other
+/// backends of this renderer (voxlod-gpu) call it, so bad input gets the same errors.
+pub fn check_frame(
+    camera: &Camera,
+    light: &Light,
+    background: Vec3,
+    options: &Options,
+) -> Result<Light> {
+    check_image_size(options.width, options.height)?;
+    camera.validate()?;
+    let light = light.validated()?;
+    for (name, v) in [("ambient", options.ambient), ("background", background)] {
+        if !(v.is_finite() && v.min_element() >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name,
+                value: v.to_string(),
+                reason: "must be finite and non-negative".into(),
+            });
+        }
     }
     Ok(light)
 }
@@ -281,14 +296,17 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
         let to_eye = (eye - centre).try_normalize().unwrap_or(Vec3::Z);
         let light = self.light.sample(centre);
         let ambient = self.options.ambient;
-        let visibility = if !self.options.shadows {
-            1.0
-        } else {
-            match self.slots {
-                Some(s) => s.visibility(index, || self.shadow(voxel, lookup)),
-                None => self.shadow(voxel, lookup),
-            }
-        };
+        // Without shadows, or where the radiance cannot depend on it (the voxel faces away
+        // from the light), the visibility is 1 and no shadow ray is traced.
+        let visibility =
+            if !self.options.shadows || !self.app.needs_visibility(index, to_eye, &light) {
+                1.0
+            } else {
+                match self.slots {
+                    Some(s) => s.visibility(index, || self.shadow(voxel, lookup)),
+                    None => self.shadow(voxel, lookup),
+                }
+            };
         let radiance = self.app.radiance(index, to_eye, &light, visibility, ambient);
         (radiance, self.app.opacity(index, to_eye))
     }

@@ -134,6 +134,55 @@ fn huge_triangles_take_the_wide_path_and_match_the_reference() {
     }
 }
 
+/// Issue 4: the equivalence suite found `PlaneSpan::new` computing `n·VOXEL` in `i64`, which
+/// overflows for triangles over ~2^19 voxels across (`|n| > 2^55`): a panic with overflow
+/// checks, wrong voxels without. Triangles reaching the lattice's limit (`±COORD_LIMIT`, 2^21
+/// voxels) through a small grid must match the per-voxel reference (`i128`).
+#[test]
+fn triangles_at_the_lattice_limit_match_the_reference() {
+    // The triangle `(p + a, p + b, p − a − b)`: its centroid is `p`.
+    let around = |p: IVec3, a: [i32; 3], b: [i32; 3]| {
+        let (a, b) = (IVec3::from_array(a), IVec3::from_array(b));
+        [p + a, p + b, p - a - b]
+    };
+    use crate::voxelize::lattice::COORD_LIMIT;
+    let (l, v) = (COORD_LIMIT, VOXEL);
+    let dims = UVec3::splat(14);
+    for tri in [
+        // The equivalence suite's "far" triangles, 1.5·10^6 voxels out.
+        [
+            IVec3::new(-384_000_000, 845, 1050),
+            IVec3::new(2483, 307_200_000, 1408),
+            IVec3::new(1331, 1562, 1856),
+        ],
+        [
+            IVec3::new(794, 1075, -280_320_000),
+            IVec3::new(357_120_000, 334_080_000, 2099),
+            IVec3::new(1690, 563, 2330),
+        ],
+        // Vertices near the limit, centroid inside the grid, tilted: |n| near 2^59.
+        around(
+            IVec3::new(7 * v + 13, 6 * v + 99, 7 * v + 50),
+            [l / 2, -l / 3 + 7, l / 2 - 1],
+            [-l / 2 + 5, l / 2, l / 5],
+        ),
+        around(
+            IVec3::new(3 * v, 11 * v + 1, 5 * v + 128),
+            [l / 2 - 3, l / 2, -l / 2],
+            [l / 3, -l / 2 + 9, l / 2],
+        ),
+    ] {
+        let n = (tri[1] - tri[0]).as_i64vec3().cross((tri[2] - tri[0]).as_i64vec3());
+        assert!(n.abs().max_element() > 1 << 55, "{n}");
+        for thin in [false, true] {
+            let got = sorted(voxels(&tri, thin, dims));
+            let want = reference(&tri, thin, dims);
+            assert!(!want.is_empty(), "the triangle must reach the grid: {tri:?}");
+            assert_eq!(got, want, "thin = {thin}, tri = {tri:?}");
+        }
+    }
+}
+
 proptest! {
     #[test]
     fn plane_span_widths_agree(
