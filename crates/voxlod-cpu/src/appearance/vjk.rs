@@ -71,7 +71,11 @@ fn affine_parts(tau: f64) -> (f64, f64) {
 /// additions and multiplications without fused multiply-add, so every target computes the
 /// same bits.
 // The split ln 2 constants are fdlibm's digits, and `!(x <= 708)` also catches NaN: both meant.
-#[allow(clippy::excessive_precision, clippy::neg_cmp_op_on_partial_ord)]
+#[allow(
+    clippy::excessive_precision,
+    clippy::neg_cmp_op_on_partial_ord,
+    reason = "fdlibm's split of ln 2 digit for digit; `!(x <= 708)` is also true for NaN"
+)]
 #[inline(always)]
 fn exp_neg(x: f64) -> f64 {
     const SCALE: f64 = 32.0 * std::f64::consts::LOG2_E;
@@ -98,7 +102,7 @@ fn exp_neg(x: f64) -> f64 {
 }
 
 /// `2^(−j/32)` for `j = 0..32` (entry 16 is 1/√2: a table of digits, not a named constant).
-#[allow(clippy::approx_constant)]
+#[allow(clippy::approx_constant, reason = "entry 16 is 2^(−1/2) = 1/√2 by construction")]
 static EXP2_NEG_32NDS: [f64; 32] = [
     1.0,
     0.978_572_062_087_700_1,
