@@ -256,6 +256,23 @@ impl Context {
         Ok((x as u32, y as u32))
     }
 
+    /// The dispatch of an image kernel with one thread per pixel in 8×8 workgroups:
+    /// `(⌈width/8⌉, ⌈height/8⌉)`, or an error with the numbers when an edge exceeds
+    /// `max_compute_workgroups_per_dimension`.
+    pub fn image_dispatch(
+        &self,
+        what: &'static str,
+        width: u32,
+        height: u32,
+    ) -> Result<(u32, u32)> {
+        let (x, y) = (width.div_ceil(8), height.div_ceil(8));
+        let max = self.limits.max_compute_workgroups_per_dimension;
+        if x.max(y) > max {
+            return Err(Error::TooLarge { what, requested: x.max(y) as u64, limit: max as u64 });
+        }
+        Ok((x, y))
+    }
+
     /// Runs `f` inside out-of-memory and validation error scopes and turns what they catch,
     /// or what the device reported meanwhile, into an error.
     pub fn guarded<T>(&self, during: &'static str, f: impl FnOnce() -> T) -> Result<T> {

@@ -30,3 +30,13 @@ pub mod voxelize;
 
 pub use context::{AdapterSummary, Context, adapters};
 pub use error::{Error, Result};
+
+/// A light as the kernels' `Params` carry it: whether it is a point light, then `light_a`
+/// (direction toward a directional light, or a point light's position) and `light_b`
+/// (irradiance, or intensity).
+pub(crate) fn light_words(light: &voxlod_scene::Light) -> (bool, glam::Vec3, glam::Vec3) {
+    match *light {
+        voxlod_scene::Light::Directional { to_light, irradiance } => (false, to_light, irradiance),
+        voxlod_scene::Light::Point { position, intensity } => (true, position, intensity),
+    }
+}

@@ -93,7 +93,7 @@ use voxlod_scene::MaterialSample;
 use voxlod_scene::{Camera, Image, Light};
 
 use crate::raycast::entry;
-use crate::{Context, Error, Result};
+use crate::{Context, Error, Result, light_words};
 
 /// The WGSL source of the kernel: shading, then the renderer.
 pub const WGSL: &str = concat!(include_str!("../shading.wgsl"), include_str!("filtered.wgsl"));
@@ -335,22 +335,12 @@ impl<'a> FilteredKernel<'a> {
         let ctx = self.ctx;
         let light = check_frame(camera, light, background, options)?;
         let Options { width, height, ambient, shadows } = *options;
-        let (lx, ly) = (width.div_ceil(8), height.div_ceil(8));
-        let max = ctx.limits().max_compute_workgroups_per_dimension;
-        if lx.max(ly) > max {
-            return Err(Error::TooLarge {
-                what: "filtered image edge (workgroups of 8 pixels)",
-                requested: lx.max(ly) as u64,
-                limit: max as u64,
-            });
-        }
+        let (lx, ly) =
+            ctx.image_dispatch("filtered image edge (workgroups of 8 pixels)", width, height)?;
         let frame = camera.frame(width, height);
         let grid = app.grid;
         let eye_grid = ((camera.eye.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
-        let (point, la, lb) = match light {
-            Light::Directional { to_light, irradiance } => (false, to_light, irradiance),
-            Light::Point { position, intensity } => (true, position, intensity),
-        };
+        let (point, la, lb) = light_words(&light);
         let dims: UVec3 = grid.dims;
         let brick_dims = (dims + BRICK_EDGE - 1) / BRICK_EDGE;
         let steps = dims.x.saturating_add(dims.y).saturating_add(dims.z).saturating_add(3);

@@ -42,7 +42,7 @@ use voxlod_cpu::render::sampling::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
 use crate::raycast::{GpuBvh, entry, upload_bvh};
-use crate::{Context, Error, Result};
+use crate::{Context, Error, Result, light_words};
 
 /// The WGSL source of the kernel: RNG, shading, BVH traversal, then the renderer.
 pub const WGSL: &str = concat!(
@@ -226,23 +226,13 @@ impl<'a> GroundTruthKernel<'a> {
         let frame = camera.frame(width, height);
         let streams = Streams::new(seed);
         let pixels = width as u64 * height as u64;
-        let (lx, ly) = (width.div_ceil(8), height.div_ceil(8));
-        let max = ctx.limits().max_compute_workgroups_per_dimension;
-        if lx.max(ly) > max {
-            return Err(Error::TooLarge {
-                what: "ground-truth image edge (workgroups of 8 pixels)",
-                requested: lx.max(ly) as u64,
-                limit: max as u64,
-            });
-        }
+        let (lx, ly) =
+            ctx.image_dispatch("ground-truth image edge (workgroups of 8 pixels)", width, height)?;
         let bytes = pixels * 16;
         let sums = ctx.storage_zeroed("ground-truth sums", bytes)?;
         let texel_bytes = pixels * size_of::<GTexel>() as u64;
         let gbuffer = ctx.storage_zeroed("ground-truth G-buffer", texel_bytes)?;
-        let (point, la, lb) = match scene.light {
-            Light::Directional { to_light, irradiance } => (false, to_light, irradiance),
-            Light::Point { position, intensity } => (true, position, intensity),
-        };
+        let (point, la, lb) = light_words(&scene.light);
         let flags = u32::from(shadows) | if point { 2 } else { 0 };
         let per_dispatch = (self.rays_per_dispatch / pixels).clamp(1, spp as u64) as u32;
         let layout = self.pipeline.get_bind_group_layout(0);
