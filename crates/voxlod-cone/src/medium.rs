@@ -34,13 +34,6 @@ impl Payload for RadiancePayload {
     fn empty() -> Self {
         Self::default()
     }
-    fn prefilter(c: &[Self; 8]) -> Self {
-        let mut p = Self::default();
-        for child in c {
-            p.add_scaled(child, 0.125);
-        }
-        p
-    }
     #[inline]
     fn add_scaled(&mut self, o: &Self, w: f32) {
         for i in 0..3 {

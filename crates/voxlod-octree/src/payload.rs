@@ -36,7 +36,15 @@ pub trait Payload: Copy + Send + Sync + std::fmt::Debug + 'static {
     fn empty() -> Self;
     /// The parent of eight children, indexed by octant `x + 2y + 4z` (0 or 1 per axis; the
     /// child at the lower coordinate has bit 0). Missing children are [`Payload::empty`].
-    fn prefilter(children: &[Self; 8]) -> Self;
+    /// The default is the plain mean: [`Payload::empty`] plus `⅛·child` for each child, in
+    /// octant order, through [`Payload::add_scaled`].
+    fn prefilter(children: &[Self; 8]) -> Self {
+        let mut parent = Self::empty();
+        for child in children {
+            parent.add_scaled(child, 0.125);
+        }
+        parent
+    }
     /// `self += w·other`, used by trilinear and inter-level interpolation.
     fn add_scaled(&mut self, other: &Self, w: f32);
     /// Mean (isotropic) opacity in \[0, 1\].
@@ -183,13 +191,6 @@ impl SggxPayload {
 impl Payload for SggxPayload {
     fn empty() -> Self {
         Self::default()
-    }
-    fn prefilter(c: &[Self; 8]) -> Self {
-        let mut p = Self::default();
-        for child in c {
-            p.add_scaled(child, 0.125);
-        }
-        p
     }
     #[inline]
     fn add_scaled(&mut self, o: &Self, w: f32) {
