@@ -4,8 +4,10 @@
 //!
 //! `cargo bench -p voxlod-cpu --bench precompute`; before the criterion runs it prints
 //! single-core CPU times (which other processes on the machine do not distort) and the
-//! issue's target, 50 000 voxels/s per core on the bunny at 256³. Set `VOXLOD_BENCH_SUBGRID=1`
-//! to also time the subgrid build.
+//! issue's target, 50 000 voxels/s per core on the bunny at 256³. Set
+//! `VOXLOD_BENCH_FITS=subgrid,vjk21,virtual-mesh` (any of them, comma-separated) to also time,
+//! on one core, sampling plus that fit: the subgrid alone, \[VJK21\] (SGGX + transmittance),
+//! the virtual mesh (SGGX, faces, subgrid).
 
 mod support;
 
@@ -14,7 +16,7 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod_cpu::appearance::sampler::SamplingContext;
-use voxlod_cpu::appearance::{averages, subgrid};
+use voxlod_cpu::appearance::{averages, sggx, subgrid, vmesh};
 use voxlod_scene::Scene;
 
 use support::{bunny, forest_of, pool, single_core, voxelized};
@@ -45,13 +47,29 @@ fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene, res: u32, samples: 
             String::new()
         }
     );
-    if std::env::var_os("VOXLOD_BENCH_SUBGRID").is_some() {
-        let (_, cpu) =
-            single_core(|| precompute(&ctx, &opts, |s| Some(subgrid::build(s))).expect("fitted"));
+    let fits = std::env::var("VOXLOD_BENCH_FITS").unwrap_or_default();
+    let wanted = |fit: &str| fits.split(',').any(|f| f.trim() == fit);
+    let report = |fit: &str, cpu: std::time::Duration| {
         eprintln!(
-            "{name} at {res}³: sampling + subgrid build: {:.0} voxels/s per core",
+            "{name} at {res}³: sampling + {fit}: {:.0} ms on one core (CPU time) = {:.0} \
+                 voxels/s per core",
+            cpu.as_secs_f64() * 1e3,
             voxels as f64 / cpu.as_secs_f64()
+        )
+    };
+    if wanted("subgrid") {
+        let build = |s: &_| Some(subgrid::build(s));
+        report("subgrid build", single_core(|| precompute(&ctx, &opts, build).expect("built")).1);
+    }
+    if wanted("vjk21") {
+        report(
+            "[VJK21] fit",
+            single_core(|| precompute(&ctx, &opts, sggx::fit).expect("fitted")).1,
         );
+    }
+    if wanted("virtual-mesh") {
+        let fit = || precompute(&ctx, &opts, vmesh::fit).expect("fitted");
+        report("virtual-mesh fit", single_core(fit).1);
     }
 
     let mut group = c.benchmark_group("precompute");

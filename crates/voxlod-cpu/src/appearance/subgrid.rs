@@ -26,7 +26,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 use voxlod_format::records::quant::unorm8;
 
 use super::sampler::{choose_face, chord, entry_point};
@@ -67,37 +67,39 @@ pub fn crossed_subcells(entry: Vec3, d: Vec3, chord: f32) -> u32 {
     if chord.is_nan() || chord <= TOUCH {
         return 0;
     }
-    // Plain compare-and-select min/max (one instruction each): no operand below is NaN.
-    let min = |a: f32, b: f32| if a < b { a } else { b };
-    let max = |a: f32, b: f32| if a > b { a } else { b };
     let (e, d) = (entry.to_array(), d.to_array());
-    let (mut lo, mut hi) = ([[0.0f32; 3]; 3], [[0.0f32; 3]; 3]);
-    for j in 0..3 {
-        let inv = 1.0 / d[j];
-        let t = [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0].map(|b: f32| (b - e[j]) * inv);
-        // `⌊3e⌋` clamped to 0..=2, by truncation (equal under the clamp, see `subcell_of`).
-        let home = ((3.0 * e[j]) as i32).clamp(0, 2) as usize;
-        for s in 0..3 {
-            let (a, b) = (t[s], t[s + 1]);
-            // A line that does not move along axis j stays in its home slab for all t.
-            let (l, h) = if s == home {
-                (f32::NEG_INFINITY, f32::INFINITY)
-            } else {
-                (f32::INFINITY, f32::NEG_INFINITY)
-            };
-            let flat = d[j] == 0.0;
-            lo[j][s] = if flat { l } else { min(a, b) };
-            hi[j][s] = if flat { h } else { max(a, b) };
+    // Per axis, the three slab intervals [lo, hi] in SIMD lanes: the four boundary crossings
+    // t = (b − e)·(1/d) of one axis at once, then min/max of neighbouring pairs.
+    let slabs = |j: usize| -> (Vec3A, Vec3A) {
+        if d[j] == 0.0 {
+            // A line that does not move along axis j stays in its home slab for all t:
+            // `⌊3e⌋` clamped to 0..=2, by truncation (equal under the clamp, see `subcell_of`).
+            let home = ((3.0 * e[j]) as i32).clamp(0, 2) as usize;
+            let lo =
+                std::array::from_fn(|s| if s == home { f32::NEG_INFINITY } else { f32::INFINITY });
+            let lo = Vec3A::from_array(lo);
+            return (lo, -lo);
         }
-    }
-    // The three x slabs side by side in SIMD lanes: one compare and one bit mask per (y, z).
-    let (lo_x, hi_x) = (Vec3A::from_array(lo[0]), Vec3A::from_array(hi[0]));
+        let inv = 1.0 / d[j];
+        let t = (Vec4::new(0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0) - Vec4::splat(e[j])) * inv;
+        let (a, b) = (Vec3A::new(t.x, t.y, t.z), Vec3A::new(t.y, t.z, t.w));
+        (a.min(b), a.max(b))
+    };
+    let (lo_x, hi_x) = slabs(0);
+    let (lo_y, hi_y) = slabs(1);
+    let (lo_z, hi_z) = slabs(2);
+    // The y slabs side by side, clipped to [0, chord]; then per (y, z) the three x slabs in
+    // SIMD lanes: one compare and one bit mask per pair. No operand is NaN, so the order of
+    // the min/max operations does not change a bit.
+    let lo_y = lo_y.max(Vec3A::ZERO);
+    let hi_y = hi_y.min(Vec3A::splat(chord));
+    let (lo_z, hi_z) = (lo_z.to_array(), hi_z.to_array());
     let mut mask = 0;
     for z in 0..3 {
+        let l_yz = lo_y.max(Vec3A::splat(lo_z[z])).to_array();
+        let h_yz = hi_y.min(Vec3A::splat(hi_z[z])).to_array();
         for y in 0..3 {
-            let l = max(max(lo[1][y], lo[2][z]), 0.0);
-            let h = min(min(hi[1][y], hi[2][z]), chord);
-            let length = hi_x.min(Vec3A::splat(h)) - lo_x.max(Vec3A::splat(l));
+            let length = hi_x.min(Vec3A::splat(h_yz[y])) - lo_x.max(Vec3A::splat(l_yz[y]));
             mask |= length.cmpgt(Vec3A::splat(TOUCH)).bitmask() << (3 * y + 9 * z);
         }
     }
@@ -119,23 +121,29 @@ pub fn for_each_subcell(entry: Vec3, d: Vec3, chord: f32, mut visit: impl FnMut(
 /// Builds the 27 sub-cell opacities of a voxel from its sampling lines (module docs: whole
 /// chord, one-cell front-hit mark, clearing), `round(255·α)` at index `x + 3y + 9z`.
 pub fn build(samples: &VoxelSamples) -> [u8; 27] {
+    // Clearing first: only marked sub-cells can end non-zero, so the lines book only those
+    // (bit by bit over the crossed ∩ marked mask, at most 7 bits), and a voxel without a
+    // front hit books nothing at all.
+    let marked = samples.surfaces().fold(0u32, |m, s| m | 1 << subcell_of(s.point));
     let mut rays = [0u32; 27];
     let mut occluded = [0u32; 27];
-    let mut marked = [false; 27];
-    for r in &samples.rays {
-        let (m, o) = (crossed_subcells(r.entry, r.dir, r.chord), r.occluded as u32);
-        for c in 0..27 {
-            let bit = m >> c & 1;
-            rays[c] += bit;
-            occluded[c] += bit & o;
-        }
-        if let Some(s) = &r.surface {
-            marked[subcell_of(s.point)] = true;
+    if marked != 0 {
+        for r in &samples.rays {
+            let o = r.occluded as u32;
+            let mut m = crossed_subcells(r.entry, r.dir, r.chord) & marked;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize;
+                rays[c] += 1;
+                occluded[c] += o;
+                m &= m - 1;
+            }
         }
     }
-    std::array::from_fn(|c| {
-        if marked[c] && rays[c] > 0 { unorm8(occluded[c] as f32 / rays[c] as f32) } else { 0 }
-    })
+    std::array::from_fn(
+        |c| {
+            if rays[c] > 0 { unorm8(occluded[c] as f32 / rays[c] as f32) } else { 0 }
+        },
+    )
 }
 
 /// How [`directional_opacity`] reads a subgrid (design note §6).

@@ -104,12 +104,26 @@ pub fn extremal_normals(axis: DVec3, theta: f64) -> [DVec3; 3] {
     })
 }
 
+/// The dot products whose angle `acos(clamp(x, −1, 1))` exceeds [`DISTINCT_ANGLE`] are
+/// exactly those below this bound: the smallest `x` whose `acos` does not, found once by
+/// bisection over the ordered bit patterns of `[0, 1]` (`acos` is monotone there), so the
+/// pass compares dot products instead of calling `acos` per pair, with the same outcome.
+static DISTINCT_DOT: std::sync::LazyLock<f64> = std::sync::LazyLock::new(|| {
+    let (mut lo, mut hi) = (0.0f64.to_bits(), 1.0f64.to_bits());
+    // Invariant: acos(lo) > DISTINCT_ANGLE ≥ acos(hi).
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if f64::from_bits(mid).acos() > DISTINCT_ANGLE { lo = mid } else { hi = mid }
+    }
+    f64::from_bits(hi)
+});
+
 /// The greedy 5° pass of a face (module docs): the kept normals (at most 4) in sample order,
 /// and whether a 4th was reached (a distribution).
 pub fn distinct_normals(normals: &[DVec3]) -> (Vec<DVec3>, bool) {
     let mut kept: Vec<DVec3> = Vec::with_capacity(4);
     for &n in normals {
-        if kept.iter().all(|k| k.dot(n).clamp(-1.0, 1.0).acos() > DISTINCT_ANGLE) {
+        if kept.iter().all(|k| k.dot(n) < *DISTINCT_DOT) {
             kept.push(n);
             if kept.len() == 4 {
                 return (kept, true);
@@ -123,8 +137,9 @@ pub fn distinct_normals(normals: &[DVec3]) -> (Vec<DVec3>, bool) {
 /// [`THETA_MIN`]. `None` for an empty set.
 pub fn cone(normals: &[DVec3]) -> Option<(DVec3, f64)> {
     let axis = normals.iter().copied().sum::<DVec3>().try_normalize()?;
-    let theta =
-        normals.iter().map(|n| n.dot(axis).clamp(-1.0, 1.0).acos()).fold(THETA_MIN, f64::max);
+    // `acos` decreases: the largest angle is that of the smallest dot product.
+    let lowest = normals.iter().map(|n| n.dot(axis)).fold(1.0, f64::min);
+    let theta = lowest.clamp(-1.0, 1.0).acos().max(THETA_MIN);
     Some((axis, theta))
 }
 
@@ -134,9 +149,13 @@ pub fn assign_faces<'a>(
     normals: impl IntoIterator<Item = DVec3> + 'a,
     frame: &'a [DVec3; 3],
 ) -> impl Iterator<Item = usize> + 'a {
-    normals
-        .into_iter()
-        .map(move |n| face_of(DVec3::new(n.dot(frame[0]), n.dot(frame[1]), n.dot(frame[2]))))
+    normals.into_iter().map(move |n| face_in(frame, n))
+}
+
+/// The face of unit normal `n` in eigenframe `frame` (see [`assign_faces`]).
+#[inline]
+fn face_in(frame: &[DVec3; 3], n: DVec3) -> usize {
+    face_of(DVec3::new(n.dot(frame[0]), n.dot(frame[1]), n.dot(frame[2])))
 }
 
 /// Fits a voxel's [`VirtualMeshRecord`] (module docs) from its case-(a) hits, with the 27
@@ -154,32 +173,32 @@ pub fn fit_with(
     sggx: &sggx::SggxFit,
     opacity: [u8; 27],
 ) -> VirtualMeshRecord {
-    let hits: Vec<(DVec3, Vec3)> = samples
+    let e = sggx.frame;
+    // The case-(a) hits as (face, normal, albedo), grouped by face in sample order (a stable
+    // sort): one allocation per voxel instead of one per face.
+    let mut hits: Vec<(usize, DVec3, Vec3)> = samples
         .surfaces()
         .map(|s| (s.normal.as_dvec3(), s.albedo))
         .filter(|(n, _)| n.is_finite() && n.length_squared() > 0.0)
-        .map(|(n, a)| (n.normalize(), a))
+        .map(|(n, a)| {
+            let n = n.normalize();
+            (face_in(&e, n), n, a)
+        })
         .collect();
-    let e = sggx.frame;
+    hits.sort_by_key(|h| h.0);
+    let normals: Vec<DVec3> = hits.iter().map(|h| h.1).collect();
     let mut rec = VirtualMeshRecord {
         axes: e.map(|a| encode_dir(a.as_vec3())),
         scales: sggx.semi_axes().map(|x| SCALE_RANGE.encode(x as f32)),
         opacity,
         ..Default::default()
     };
-    let mut by_face: [Vec<DVec3>; 8] = Default::default();
-    let mut colour = [(Vec3::ZERO, 0u32); 8];
-    for ((n, albedo), f) in hits.iter().zip(assign_faces(hits.iter().map(|h| h.0), &e)) {
-        by_face[f].push(*n);
-        colour[f].0 += *albedo;
-        colour[f].1 += 1;
-    }
-    for f in 0..8 {
-        let normals = &by_face[f];
-        if normals.is_empty() {
-            continue;
-        }
-        rec.colors[f] = encode_srgb8(colour[f].0 / colour[f].1 as f32);
+    let mut start = 0;
+    for group in hits.chunk_by(|a, b| a.0 == b.0) {
+        let (f, normals) = (group[0].0, &normals[start..start + group.len()]);
+        start += group.len();
+        let albedo = group.iter().map(|h| h.2).sum::<Vec3>() / group.len() as f32;
+        rec.colors[f] = encode_srgb8(albedo);
         let (kept, distribution) = distinct_normals(normals);
         let stored: Vec<DVec3> = if distribution {
             rec.distribution |= 1 << f;
@@ -579,6 +598,22 @@ mod tests {
         let four = [rot(0.0), rot(6.0), rot(12.0), rot(18.0), rot(24.0)];
         let (kept, d) = distinct_normals(&four);
         assert!(d && kept.len() == 4);
+    }
+
+    /// The dot-product bound decides exactly as `acos` against 5° does: at the bound and its
+    /// neighbours, and over a million dot products near it and across [−1.1, 1.1].
+    #[test]
+    fn distinct_dot_bound_agrees_with_acos() {
+        let by_acos = |x: f64| x.clamp(-1.0, 1.0).acos() > DISTINCT_ANGLE;
+        let b = *DISTINCT_DOT;
+        assert!(!by_acos(b) && by_acos(f64::from_bits(b.to_bits() - 1)));
+        for i in 0..1_000_000u64 {
+            let near = f64::from_bits(b.to_bits() - 500_000 + i);
+            let wide = -1.1 + 2.2 * i as f64 / 1e6;
+            for x in [near, wide] {
+                assert_eq!(x < b, by_acos(x), "{x}");
+            }
+        }
     }
 
     #[test]
