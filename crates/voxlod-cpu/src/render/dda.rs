@@ -22,7 +22,7 @@
 //! re-based at its grid entry point, so a camera far from the grid keeps full precision; a
 //! WGSL port receives the same `f32` grid-space ray or computes it the same way in `f32`.
 
-use glam::{IVec3, UVec3, Vec3};
+use glam::{BVec3A, IVec3, UVec3, Vec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, GridSpec};
 
 use super::bricks::BrickLookup;
@@ -50,12 +50,17 @@ pub struct DdaVoxel {
 #[derive(Clone, Copy, Debug)]
 pub struct Dda {
     /// Ray origin in grid coordinates, moved to where the ray enters the grid.
-    origin: Vec3,
+    origin: Vec3A,
     /// `1/d` per axis in grid coordinates, 0 for a parallel axis.
-    inv: Vec3,
+    inv: Vec3A,
     /// Direction in grid coordinates, with parallel components set to 0.
-    dir: Vec3,
+    dir: Vec3A,
     step: IVec3,
+    /// Per axis, the offset from a cell to the plane the ray crosses next (1 for `step` 1,
+    /// else 0), and whether the ray is parallel to the axis's planes: the three crossing
+    /// times of a cell in SIMD lanes ([`Dda::next_crossing`]).
+    ahead: IVec3,
+    parallel: BVec3A,
     dims: IVec3,
     cell: IVec3,
     /// `t` relative to `origin` where the current voxel was entered.
@@ -79,10 +84,12 @@ impl Dda {
         let d = dir / size;
         let dims = grid.dims.as_ivec3();
         let mut dda = Self {
-            origin: o,
-            inv: Vec3::ZERO,
-            dir: Vec3::ZERO,
+            origin: o.into(),
+            inv: Vec3A::ZERO,
+            dir: Vec3A::ZERO,
             step: IVec3::ZERO,
+            ahead: IVec3::ZERO,
+            parallel: BVec3A::FALSE,
             dims,
             cell: IVec3::ZERO,
             t: 0.0,
@@ -102,8 +109,10 @@ impl Dda {
             return dda;
         }
         dda.step = IVec3::select(parallel, IVec3::ZERO, d.signum().as_ivec3());
-        dda.inv = Vec3::select(parallel, Vec3::ZERO, d.recip());
-        dda.dir = d;
+        dda.inv = Vec3::select(parallel, Vec3::ZERO, d.recip()).into();
+        dda.dir = d.into();
+        dda.ahead = IVec3::select(dda.step.cmpgt(IVec3::ZERO), IVec3::ONE, IVec3::ZERO);
+        dda.parallel = BVec3A::new(parallel.x, parallel.y, parallel.z);
         // Clip [t_min, t_max] to the grid box; parallel axes must contain the origin.
         let (mut t0, mut t1) = (t_min, t_max);
         let mut entry_axis = None;
@@ -129,7 +138,7 @@ impl Dda {
         }
         // Re-origin at the entry point for precision; `t` values stay those of the world ray.
         let start = if t0.is_finite() { t0 } else { 0.0 };
-        dda.origin = Vec3::select(parallel, o, o + d * start);
+        dda.origin = Vec3::select(parallel, o, o + d * start).into();
         if let Some(a) = entry_axis {
             // Exactly on the entry face, so that its plane is crossed at t = 0.
             dda.origin[a] = if d[a] > 0.0 { 0.0 } else { dims[a] as f32 };
@@ -193,14 +202,23 @@ impl Dda {
     /// there (a bit mask).
     #[inline(always)]
     fn next_crossing(&self, cell: IVec3) -> (f32, u32) {
-        let ts = Vec3::new(self.next_t(0, cell.x), self.next_t(1, cell.y), self.next_t(2, cell.z));
+        // `next_t` of the three axes at once: lane by lane the same plane expression.
+        let k = (cell + self.ahead).as_vec3a();
+        let ts = Vec3A::select(self.parallel, Vec3A::INFINITY, (k - self.origin) * self.inv);
         let t = ts.min_element();
-        (t, ts.cmpeq(Vec3::splat(t)).bitmask())
+        (t, ts.cmpeq(Vec3A::splat(t)).bitmask())
     }
 
     /// Entry normal for crossing the planes of `axes` (the largest `|dir|` among them).
     #[inline(always)]
     fn normal_for(&self, axes: u32) -> IVec3 {
+        let mut n = IVec3::ZERO;
+        if axes.is_power_of_two() {
+            // One axis crossed (all but edge and corner crossings): no choice to make.
+            let a = axes.trailing_zeros() as usize;
+            n[a] = -self.step[a];
+            return n;
+        }
         let mut best = 0;
         let mut best_d = -1.0;
         for a in 0..3 {
@@ -209,7 +227,6 @@ impl Dda {
                 best_d = self.dir[a].abs();
             }
         }
-        let mut n = IVec3::ZERO;
         n[best] = -self.step[best];
         n
     }
