@@ -1,6 +1,6 @@
 // The filtered voxel renderer for Averages and [VJK21] (SGGX) records (voxlod-cpu's
 // render::filtered with appearance::averages, appearance::sggx and appearance::transmittance),
-// appended to shading.wgsl. One invocation per pixel in 8×8 tiles; each
+// and the baseline renderer of opaque voxels (render::baseline), appended to shading.wgsl. One invocation per pixel in 8×8 tiles; each
 // pixel sends the 4 rays of PATTERN_4 through the grid with the DDA of render/dda.rs (the same
 // plane expression, tie rule and clipping), composites the voxels with a record front to back
 // until T < 0.001, and evaluates every voxel it meets per hit: radiance and opacity for the
@@ -19,7 +19,7 @@ struct Params {
     light_b: vec4<f32>,      // directional: irradiance; point: intensity
     grid: vec4<f32>,         // origin (f32), w = voxel size (f32)
     dims: vec4<u32>,         // grid dims, w = flags (1: shadows, 2: point light)
-    size: vec4<u32>,         // width, height, max DDA steps, record kind (0 Averages, 1 [VJK21])
+    size: vec4<u32>,         // width, height, max DDA steps, kind (0 Averages, 1 [VJK21], 2 baseline)
     brick_dims: vec4<u32>,   // bricks per axis, 0
 }
 
@@ -33,6 +33,8 @@ struct Brick {
 // A record decoded on the host by voxlod-format's decoders.
 // Averages: a = (albedo, opacity), b = (mean normal (zero: none), 0), c.w = specular level,
 // d.w = shininess. [VJK21]: a = (albedo, σ), b.w = γ, the SGGX matrix's columns in b, c, d.
+// Baseline: a = (albedo, 1): an opaque cube, so a shadow ray's transmittance drops to 0 at the
+// first voxel it counts (the CPU's "blocked").
 struct Record {
     a: vec4<f32>,
     b: vec4<f32>,
@@ -77,6 +79,8 @@ struct Dda {
     t: f32,
     t_end: f32,
     t_base: f32,
+    // Outward normal of the face the current voxel was entered through (0: started inside).
+    entry: vec3<i32>,
     done: bool,
 }
 
@@ -183,6 +187,9 @@ fn dda_new(o: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> Dda {
     s.t = t0 - start;
     s.t_end = t1 - start;
     s.cell = locate(s, s.t, vec3<i32>(0), s.dims - vec3<i32>(1));
+    if entry_axis < 3u {
+        s.entry[entry_axis] = -s.step[entry_axis];
+    }
     s.done = false;
     return s;
 }
@@ -191,6 +198,23 @@ struct Step {
     voxel: vec3<i32>,
     t_enter: f32,
     t_exit: f32,
+    normal: vec3<i32>,
+}
+
+// Dda::normal_for: the entry normal for crossing the planes of `axes` (the largest |dir|
+// among them, the first on ties).
+fn normal_for(d: Dda, axes: vec3<i32>) -> vec3<i32> {
+    var best = 0u;
+    var best_d = -1.0;
+    for (var a = 0u; a < 3u; a++) {
+        if axes[a] != 0 && abs(d.dir[a]) > best_d {
+            best = a;
+            best_d = abs(d.dir[a]);
+        }
+    }
+    var n = vec3<i32>(0);
+    n[best] = -d.step[best];
+    return n;
 }
 
 // Dda::emit_and_advance: the current voxel, then the walk moves past it.
@@ -203,10 +227,12 @@ fn dda_next(s: ptr<function, Dda>) -> Step {
     out.voxel = d.cell;
     out.t_enter = d.t_base + d.t;
     out.t_exit = d.t_base + min(tn, d.t_end);
+    out.normal = d.entry;
     let cell = d.cell + d.step * axes;
     if tn >= d.t_end || any(cell < vec3<i32>(0)) || any(cell >= d.dims) {
         (*s).done = true;
     } else {
+        (*s).entry = normal_for(d, axes);
         (*s).cell = cell;
         (*s).t = tn;
     }
@@ -433,6 +459,39 @@ fn radiance(index: u32, c: vec3<i32>) -> vec3<f32> {
     return shade(m, n, to_eye, lit.light, visibility, params.ambient.xyz);
 }
 
+// ---- The baseline renderer (render/baseline/mod.rs `trace`): the first voxel stops the ray.
+
+// started_inside_normal: the face opposite the ray's dominant direction.
+fn started_inside_normal(dir: vec3<f32>) -> vec3<f32> {
+    let a = abs(dir);
+    var axis = vec3<f32>(0.0, 0.0, 1.0);
+    if a.x >= a.y && a.x >= a.z {
+        axis = vec3<f32>(1.0, 0.0, 0.0);
+    } else if a.y >= a.z {
+        axis = vec3<f32>(0.0, 1.0, 0.0);
+    }
+    // f32::signum: +1 for +0.
+    return -axis * select(-1.0, 1.0, dot(dir, axis) >= 0.0);
+}
+
+// The radiance of the opaque voxel `v` (record r) hit by the camera ray along unit `dir`: shaded
+// at the entry point with the entry face's normal; the voxel's shadow ray (from its centre, as
+// the CPU's cached visibility) only where that normal faces the light.
+fn baseline_radiance(r: Record, v: Step, dir: vec3<f32>) -> vec3<f32> {
+    var n = vec3<f32>(v.normal);
+    if all(v.normal == vec3<i32>(0)) {
+        n = started_inside_normal(dir);
+    }
+    let lit = light_at(params.eye.xyz + dir * v.t_enter);
+    var visibility = 1.0;
+    if (params.dims.w & 1u) != 0u && dot(n, lit.light.to_light) > 0.0 {
+        visibility = shadow(v.voxel, light_at(centre_of(v.voxel)));
+    }
+    var m: MaterialSample;
+    m.albedo = r.a.xyz;
+    return shade(m, n, -dir, lit.light, visibility, params.ambient.xyz);
+}
+
 // ---- Camera rays.
 
 fn ray_dir(p: vec2<f32>) -> vec3<f32> {
@@ -451,6 +510,9 @@ fn trace(dir: vec3<f32>) -> vec4<f32> {
         let index = record_of(v.voxel);
         if index == NONE {
             continue;
+        }
+        if params.size.w == 2u {
+            return vec4<f32>(baseline_radiance(records[index], v, dir), 0.0);
         }
         let c = radiance(index, v.voxel);
         let next = apply_opacity(t, records[index], (v.t_exit - v.t_enter) * params.eye_grid.w);

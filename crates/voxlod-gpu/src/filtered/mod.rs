@@ -16,8 +16,13 @@
 //! ([`Appearance::needs_visibility`](voxlod_cpu::appearance::Appearance::needs_visibility));
 //! SGGX voxels always do (the CPU's default).
 //!
-//! The baseline renderer (opaque cubes) and the virtual-mesh and Adaptive records are not
-//! ported yet.
+//! The baseline renderer (opaque cubes of one colour, [`voxlod_cpu::render::baseline`]) runs
+//! in the same kernel as record kind 2 ([`FilteredKernel::upload_baseline`],
+//! [`FilteredKernel::render_baseline`]): the DDA reports the entry face's normal as the CPU's
+//! does (`normal_for`: the largest `|dir|` among the axes crossed), the first voxel stops the
+//! ray and is shaded at its entry point, and its shadow ray is the filtered one over records of
+//! opacity 1 (the transmittance drops to 0 at the first counted voxel: the CPU's "blocked").
+//! The virtual-mesh and Adaptive records are not ported yet.
 //!
 //! # Use
 //! ```no_run
@@ -85,6 +90,7 @@
 
 use glam::{UVec3, Vec3, Vec4};
 use voxlod_cpu::appearance::{AppearanceGrid, RecordAppearance, record_material};
+use voxlod_cpu::render::baseline::{self, BaselineVoxel};
 use voxlod_cpu::render::bricks::DenseBricks;
 use voxlod_cpu::render::filtered::{FrameCache, Options, check_frame};
 use voxlod_format::records::{AverageRecord, SggxRecord};
@@ -165,6 +171,9 @@ pub enum RecordKind {
     Averages = 0,
     /// [`SggxRecord`]: \[VJK21\] transmittance, SGGX shading.
     Vjk21 = 1,
+    /// [`BaselineVoxel`]: opaque cubes of one colour, the baseline renderer
+    /// ([`voxlod_cpu::render::baseline`]).
+    Baseline = 2,
 }
 
 /// The look-up arrays of a brick map: the dense brick table (`u32::MAX` = empty), the bricks'
@@ -299,8 +308,7 @@ impl<'a> FilteredKernel<'a> {
                 reason: format!("one per record: {}", app.records.len()),
             }));
         }
-        let (mut table, mut bricks, mut slots) = brick_lookup(&app.records)?;
-        let mut records: Vec<GpuRecord> = app
+        let records: Vec<GpuRecord> = app
             .records
             .values()
             .iter()
@@ -309,15 +317,66 @@ impl<'a> FilteredKernel<'a> {
                 decode(r, &record_material(r.color(), app.specular.as_ref().map(|s| &s[i])))
             })
             .collect();
+        self.buffers(kind, app.grid, &app.records, records)
+    }
+
+    /// Uploads the baseline renderer's voxels (opaque cubes of one colour) over `grid`, with
+    /// the checks [`voxlod_cpu::render::baseline::render`] makes on them (a valid grid, a brick
+    /// map of the grid's size). Render with [`FilteredKernel::render_baseline`].
+    pub fn upload_baseline(
+        &self,
+        grid: &GridSpec,
+        voxels: &BrickMap<BaselineVoxel>,
+    ) -> Result<GpuRecords> {
+        grid.validate().map_err(voxlod_cpu::Error::from)?;
+        if voxels.dims() != grid.dims {
+            return Err(Error::Cpu(voxlod_cpu::Error::InvalidParameter {
+                name: "voxels",
+                value: format!("brick map of {} voxels", voxels.dims()),
+                reason: format!("the grid has {} voxels", grid.dims),
+            }));
+        }
+        let records = voxels
+            .values()
+            .iter()
+            .map(|v| GpuRecord { a: v.albedo().extend(1.0).to_array(), ..Default::default() })
+            .collect();
+        self.buffers(RecordKind::Baseline, *grid, voxels, records)
+    }
+
+    /// The buffers of `records` laid out as `map`'s values.
+    fn buffers<T>(
+        &self,
+        kind: RecordKind,
+        grid: GridSpec,
+        map: &BrickMap<T>,
+        mut records: Vec<GpuRecord>,
+    ) -> Result<GpuRecords> {
+        let (mut table, mut bricks, mut slots) = brick_lookup(map)?;
         let ctx = self.ctx;
         Ok(GpuRecords {
             kind,
-            grid: app.grid,
+            grid,
             table: ctx.storage_init("brick table", non_empty(&mut table))?,
             bricks: ctx.storage_init("brick masks", non_empty(&mut bricks))?,
             slots: ctx.storage_init("record slots", non_empty(&mut slots))?,
             records: ctx.storage_init("filtered records", non_empty(&mut records))?,
         })
+    }
+
+    /// Renders uploaded baseline voxels from `camera`: what
+    /// [`voxlod_cpu::render::baseline::render`] returns for them, with the same errors.
+    pub fn render_baseline(
+        &self,
+        voxels: &GpuRecords,
+        camera: &Camera,
+        light: &Light,
+        background: Vec3,
+        options: &baseline::Options,
+    ) -> Result<Image> {
+        let baseline::Options { width, height, ambient, shadows } = *options;
+        let options = Options { width, height, ambient, shadows };
+        self.render(voxels, camera, light, background, &options)
     }
 
     /// Renders the uploaded grid from `camera`: what

@@ -1,11 +1,15 @@
-//! Kernel 4, the filtered voxel renderer on Averages and \[VJK21\] (SGGX) records: the bunny
-//! voxelized at 40³ (records fitted from 32 lines per voxel), 48×48 pixels, directional light
-//! with shadows on and off, a point light with shadows, and random cameras and lights. Each
-//! body runs once per record kind (one row each).
+//! Kernel 4, the voxel renderers: the filtered renderer on Averages and \[VJK21\] (SGGX)
+//! records, and the baseline renderer of opaque voxels, on the bunny voxelized at 40³ (records
+//! fitted from 32 lines per voxel), 48×48 pixels, directional light with shadows on and off, a
+//! point light with shadows, and random cameras and lights. Each body runs once per record
+//! kind (one row each).
 //!
 //! - **CPU reference row**: the claim the GPU kernel rests on — the cached render equals
 //!   `render_uncached` (every value evaluated per ray) bit for bit, so evaluating per hit on
-//!   the GPU is the same renderer. Bound: exact.
+//!   the GPU is the same renderer. The baseline renderer caches only a voxel's shadow-ray
+//!   visibility, a function of the voxel alone; its row renders on one thread and on the
+//!   whole pool (another order of first visits to each voxel) and requires the same bits.
+//!   Bound: exact.
 //! - **GPU rows**: against the CPU render. Bound: [`GPU_BOUND`], **every channel within
 //!   1 step of 8-bit sRGB for at least 99 % of the pixels**. Why: both walk the same DDA
 //!   (ported line by line) and shade with the same function, so a ray that visits the same
@@ -29,10 +33,11 @@ use glam::Vec3;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod_cpu::appearance::sampler::SamplingContext;
 use voxlod_cpu::appearance::{Appearance, AppearanceGrid, averages, sggx};
+use voxlod_cpu::render::baseline::{self, BaselineVoxel};
 use voxlod_cpu::render::filtered::{FrameCache, Options, render, render_uncached};
 use voxlod_cpu::voxelize::{self, voxelize};
-use voxlod_format::GridSpec;
 use voxlod_format::records::{AverageRecord, SggxRecord};
+use voxlod_format::{BrickMap, GridSpec};
 use voxlod_gpu::filtered::{FilteredKernel, GpuRecords, RecordKind};
 use voxlod_scene::{Camera, Image, Light, Scene};
 
@@ -51,6 +56,8 @@ struct Fixture {
     scene: Scene,
     averages: AppearanceGrid<AverageRecord>,
     vjk21: AppearanceGrid<SggxRecord>,
+    grid: GridSpec,
+    baseline: BrickMap<BaselineVoxel>,
 }
 
 fn fixture() -> &'static Fixture {
@@ -66,20 +73,38 @@ fn fixture() -> &'static Fixture {
         let opts = PrecomputeOptions { rays: 32, seed: 0 };
         let averages = precompute(&ctx, &opts, averages::fit).expect("Averages");
         let vjk21 = precompute(&ctx, &opts, sggx::fit).expect("[VJK21]");
-        Fixture { scene, averages, vjk21 }
+        let baseline = baseline::build(&scene, &geometry, &vox).expect("baseline voxels");
+        Fixture { scene, averages, vjk21, grid: spec, baseline }
     })
 }
 
-/// The record grid of `kind`, as an [`Appearance`], with its layout.
-fn app(kind: RecordKind) -> (&'static dyn Appearance, &'static voxlod_format::BrickMap<()>) {
-    static LAYOUTS: OnceLock<[voxlod_format::BrickMap<()>; 2]> = OnceLock::new();
+/// The record grid of a filtered `kind`, as an [`Appearance`], with its layout.
+fn app(kind: RecordKind) -> (&'static dyn Appearance, &'static BrickMap<()>) {
+    static LAYOUTS: OnceLock<[BrickMap<()>; 2]> = OnceLock::new();
     let f = fixture();
     let layouts =
         LAYOUTS.get_or_init(|| [f.averages.records.map(|_| ()), f.vjk21.records.map(|_| ())]);
     match kind {
         RecordKind::Averages => (&f.averages, &layouts[0]),
         RecordKind::Vjk21 => (&f.vjk21, &layouts[1]),
+        RecordKind::Baseline => unreachable!("the baseline's voxels are no Appearance"),
     }
+}
+
+/// Voxels with a record of `kind`.
+fn voxel_count(kind: RecordKind) -> usize {
+    match kind {
+        RecordKind::Baseline => fixture().baseline.len(),
+        _ => app(kind).0.len(),
+    }
+}
+
+/// The baseline renderer's CPU image, on the current rayon pool.
+fn cpu_baseline(camera: &Camera, light: &Light, bg: Vec3, o: &Options) -> Result<Image, String> {
+    let f = fixture();
+    let Options { width, height, ambient, shadows } = *o;
+    let options = baseline::Options { width, height, ambient, shadows };
+    baseline::render(&f.grid, &f.baseline, camera, light, bg, &options).map_err(|e| e.to_string())
 }
 
 fn upload(k: &FilteredKernel<'_>, kind: RecordKind) -> Result<GpuRecords, String> {
@@ -87,6 +112,7 @@ fn upload(k: &FilteredKernel<'_>, kind: RecordKind) -> Result<GpuRecords, String
     match kind {
         RecordKind::Averages => k.upload_averages(&f.averages),
         RecordKind::Vjk21 => k.upload_vjk21(&f.vjk21),
+        RecordKind::Baseline => k.upload_baseline(&f.grid, &f.baseline),
     }
     .map_err(|e| e.to_string())
 }
@@ -98,6 +124,9 @@ fn cpu(
     bg: Vec3,
     options: &Options,
 ) -> Result<Image, String> {
+    if kind == RecordKind::Baseline {
+        return cpu_baseline(camera, light, bg, options);
+    }
     let (a, layout) = app(kind);
     let mut cache = FrameCache::with_layout(a, layout).map_err(|e| e.to_string())?;
     render(&mut cache, camera, light, bg, options).map_err(|e| e.to_string())
@@ -110,6 +139,11 @@ fn uncached(
     bg: Vec3,
     options: &Options,
 ) -> Result<Image, String> {
+    if kind == RecordKind::Baseline {
+        let one =
+            rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| e.to_string())?;
+        return one.install(|| cpu_baseline(camera, light, bg, options));
+    }
     let (a, layout) = app(kind);
     let cache = FrameCache::with_layout(a, layout).map_err(|e| e.to_string())?;
     render_uncached(&cache, camera, light, bg, options).map_err(|e| e.to_string())
@@ -119,6 +153,7 @@ fn prefix(kind: RecordKind) -> &'static str {
     match kind {
         RecordKind::Averages => "averages",
         RecordKind::Vjk21 => "vjk21",
+        RecordKind::Baseline => "baseline",
     }
 }
 
@@ -128,6 +163,14 @@ pub fn averages_scenes(backend: &Backend) -> Result<Measure, String> {
 
 pub fn vjk21_scenes(backend: &Backend) -> Result<Measure, String> {
     scenes_body(backend, RecordKind::Vjk21)
+}
+
+pub fn baseline_scenes(backend: &Backend) -> Result<Measure, String> {
+    scenes_body(backend, RecordKind::Baseline)
+}
+
+pub fn baseline_property(backend: &Backend) -> Result<Measure, String> {
+    property(backend, RecordKind::Baseline)
 }
 
 pub fn averages_property(backend: &Backend) -> Result<Measure, String> {
@@ -185,7 +228,7 @@ fn scenes_body(backend: &Backend, kind: RecordKind) -> Result<Measure, String> {
                 }
                 m.note += &format!(
                     ", {covered} pixels covered (≥ 10 % required), {} voxels, {seconds:.2} s",
-                    app(kind).0.len()
+                    voxel_count(kind)
                 );
                 m
             }

@@ -47,6 +47,8 @@ fn equivalence_suite() {
         suite.run("filtered Averages (proptest)", backend, filtered::averages_property);
         suite.run("filtered VJK21 (scenes)", backend, filtered::vjk21_scenes);
         suite.run("filtered VJK21 (proptest)", backend, filtered::vjk21_property);
+        suite.run("baseline voxels (scenes)", backend, filtered::baseline_scenes);
+        suite.run("baseline voxels (proptest)", backend, filtered::baseline_property);
     }
     suite.finish();
 }
