@@ -213,16 +213,18 @@ fn build_all(
     let t = Instant::now();
     let g = precompute(ctx, &opts, vmesh::fit)?;
     let precompute_vm = t.elapsed();
-    for (rule, name) in [
-        (DirectionalRule::Lines, "virtual mesh (lines)"),
-        (DirectionalRule::Circles, "virtual mesh (circles)"),
+    for (rule, projected_area, name) in [
+        (DirectionalRule::Lines, false, "virtual mesh (lines)"),
+        (DirectionalRule::Circles, false, "virtual mesh (circles)"),
+        (DirectionalRule::Lines, true, "virtual mesh (lines × area)"),
     ] {
+        let grid = VirtualMeshGrid { rule, projected_area, ..VirtualMeshGrid::new(g.clone()) };
         built.push(Built {
             method: name.into(),
             record_bytes: g.record_bytes() as f64,
             memory_bytes: g.memory_bytes(),
             precompute: precompute_vm,
-            grid: Box::new(VirtualMeshGrid { rule, ..VirtualMeshGrid::new(g.clone()) }),
+            grid: Box::new(grid),
             mix: None,
         });
     }

@@ -78,6 +78,54 @@ proptest! {
     }
 }
 
+/// The virtual mesh with projected-area scaling makes a voxel crossed by a plane nearly
+/// transparent edge-on (≤ 0.05 over 64 directions in the plane) and keeps it ≥ 0.99 face-on;
+/// without it the edge-on floor is the subgrid's third. A record whose normals cover every
+/// direction (an isotropic SGGX) keeps ≥ 0.99 of its subgrid opacity from every direction.
+#[test]
+fn projected_area_makes_a_plane_transparent_edge_on() {
+    use crate::appearance::vmesh::{self, VirtualMeshGrid, projected_area_ratio};
+    for axis in 0..3 {
+        let sc = plane(axis, 0.45, false, false);
+        let (g, v) = prepare(&sc, 4);
+        let ctx = SamplingContext::new(&sc, &g, &v).unwrap();
+        let opts = PrecomputeOptions { rays: 600, seed: 3 };
+        let grid = precompute(&ctx, &opts, vmesh::fit).unwrap();
+        let plain = VirtualMeshGrid::new(grid.clone());
+        let scaled = VirtualMeshGrid { projected_area: true, ..VirtualMeshGrid::new(grid) };
+        let i = scaled.index_of(UVec3::ONE).expect("the crossed voxel has a record");
+        let alpha = |app: &VirtualMeshGrid, d: Vec3| match app.opacity(i, d) {
+            Opacity::Alpha(a) => a,
+            other => panic!("virtual-mesh opacity is alpha, not {other:?}"),
+        };
+        for d in [Vec3::AXES[axis], -Vec3::AXES[axis]] {
+            assert!(alpha(&scaled, d) >= 0.99, "axis {axis}, face-on {d}: {}", alpha(&scaled, d));
+        }
+        let (u, w) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+        for k in 0..64 {
+            let (s, c) = (std::f32::consts::TAU * k as f32 / 64.0).sin_cos();
+            let d = u * c + w * s;
+            assert!(alpha(&scaled, d) <= 0.05, "axis {axis}, edge-on {d}: {}", alpha(&scaled, d));
+            assert!(alpha(&plain, d) >= 0.2, "axis {axis}, edge-on {d}: {}", alpha(&plain, d));
+        }
+    }
+    // Normals spread over every direction: an isotropic SGGX, ratio 1 everywhere (to the
+    // byte quantization of the semi-axes).
+    let semi = voxlod_format::records::SCALE_RANGE.encode(0.56);
+    let rec = voxlod_format::records::VirtualMeshRecord {
+        axes: [[127, 0, 0], [0, 127, 0], [0, 0, 127]],
+        scales: [semi; 3],
+        ..Default::default()
+    };
+    for k in 0..200u32 {
+        let z = 1.0 - 2.0 * (k as f32 + 0.5) / 200.0;
+        let phi = k as f32 * 2.399_963;
+        let d = Vec3::new((1.0 - z * z).sqrt() * phi.cos(), (1.0 - z * z).sqrt() * phi.sin(), z);
+        let r = projected_area_ratio(&rec, d);
+        assert!((0.99..=1.0).contains(&r), "{d}: {r}");
+    }
+}
+
 /// Records exist exactly for the voxels whose samples have a front hit, in the voxelization's
 /// Morton order; the brick map is valid.
 #[test]
