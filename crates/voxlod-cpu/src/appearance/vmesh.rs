@@ -312,7 +312,7 @@ pub fn projected_area_ratio(rec: &VirtualMeshRecord, dir: Vec3) -> f32 {
     let sigma: [f32; 3] =
         std::array::from_fn(|k| std::f32::consts::PI * t[(k + 1) % 3] * t[(k + 2) % 3]);
     let top = sigma[0].max(sigma[1]).max(sigma[2]);
-    if !(top > 0.0) || !dir.is_finite() {
+    if top.is_nan() || top <= 0.0 || !dir.is_finite() {
         return 1.0;
     }
     let area2: f32 = (0..3).map(|k| (sigma[k] * rec.axis(k).dot(dir)).powi(2)).sum();
