@@ -8,8 +8,11 @@
 //! metavoxels and need tens of GB with this retained-volume reference).
 //!
 //! `cargo bench -p voxlod-cpu --bench volume`. Before the criterion runs it prints the stage
-//! times of builds (median of 3) and the bytes held. `VOXLOD_BENCH_VOLUME_MAX=10000`
-//! skips the larger particle counts; criterion runs only up to 10⁴ (a 10⁵ build takes seconds).
+//! times of builds (median of 3) and the bytes held, and the smoke frame's stages.
+//! `VOXLOD_BENCH_VOLUME_MAX=10000` skips the larger particle counts,
+//! `VOXLOD_BENCH_VOLUME_COUNTS=1000,10000` picks them; criterion runs only up to 10⁴ (a 10⁵
+//! build takes seconds). A criterion filter matching nothing (`-- none`) prints the figures
+//! only.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -83,7 +86,12 @@ fn stages(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(3));
-    for n in [1_000, 10_000, 100_000].into_iter().filter(|&n| n <= max) {
+    // `VOXLOD_BENCH_VOLUME_COUNTS=1000,10000` picks the particle counts (default all up to MAX).
+    let counts: Vec<usize> = std::env::var("VOXLOD_BENCH_VOLUME_COUNTS")
+        .ok()
+        .map(|s| s.split(',').filter_map(|n| n.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![1_000, 10_000, 100_000]);
+    for n in counts.into_iter().filter(|&n| n <= max) {
         let spheres = cluster(n, &spec);
         let build =
             || volume::build(&spheres, &map, &spec, &settings, Some(&frame), None).expect("built");
@@ -130,10 +138,21 @@ fn stages(c: &mut Criterion) {
     };
     let t = std::time::Instant::now();
     frame_fn();
+    let frame_s = t.elapsed().as_secs_f64();
+    let v = volume::build(&spheres, &system.displacement, &spec, &settings, Some(&frame), None)
+        .expect("built");
+    let m0 = std::time::Instant::now();
+    march::render(&v, &camera, &options, None).expect("rendered");
+    let s = v.times;
     eprintln!(
-        "smoke preset ({} particles), 256³, {SIZE}²: one frame {:.3} s",
+        "smoke preset ({} particles), 256³, {SIZE}²: one frame {frame_s:.3} s; kept {} \
+         metavoxels; binning+cull {:.3} s, fill {:.3} s, propagation {:.3} s, march {:.3} s",
         spheres.len(),
-        t.elapsed().as_secs_f64()
+        v.stats.kept,
+        (s.binning + s.culling).as_secs_f64(),
+        s.fill.as_secs_f64(),
+        s.propagation.as_secs_f64(),
+        m0.elapsed().as_secs_f64()
     );
     group.bench_function("smoke-frame/10000", |b| b.iter(|| black_box(frame_fn())));
     group.finish();

@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use voxlod_scene::camera::CameraFrame;
 use voxlod_scene::{Camera, Image};
 
-use super::{Attenuation, Volume};
+use super::{Attenuation, Metavoxel, Volume};
 use crate::render::check_image_size;
 use crate::{Error, Result};
 
@@ -134,14 +134,24 @@ pub fn sort_order(volume: &Volume, eye: Vec3) -> Vec<(usize, bool)> {
         .collect()
 }
 
-/// Screen rectangle (x0, y0, x1, y1), exclusive ends, that metavoxel `c`'s box projects to; the
-/// whole image when a corner is behind the eye.
-fn screen_rect(volume: &Volume, frame: &CameraFrame, c: [u32; 3]) -> [u32; 4] {
+/// The box a ray marches through in metavoxel `mv` (voxel coordinates): its occupied box
+/// grown by one voxel and clipped to the metavoxel, so that every sample that can fall in a
+/// non-zero voxel lies in it (the samples skipped all read zero voxels: the same image).
+fn march_box(volume: &Volume, mv: &Metavoxel) -> (Vec3, Vec3) {
     let m = volume.spec.metavoxel_edge as f32;
-    let lo = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * m;
+    let base = Vec3::new(mv.coord[0] as f32, mv.coord[1] as f32, mv.coord[2] as f32) * m;
+    let [lo, hi] = mv.occupied;
+    let lo = (Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) - 1.0).max(Vec3::ZERO);
+    let hi = (Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) + 1.0).min(Vec3::splat(m));
+    (base + lo, base + hi)
+}
+
+/// Screen rectangle (x0, y0, x1, y1), exclusive ends, that the voxel-space box `[lo, hi]`
+/// projects to; the whole image when a corner is behind the eye.
+fn screen_rect(volume: &Volume, frame: &CameraFrame, (lo, hi): (Vec3, Vec3)) -> [u32; 4] {
     let (mut a, mut b) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
     for k in 0..8 {
-        let q = lo + Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * m;
+        let q = Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
         match frame.project(volume.spec.frame.to_world(q)) {
             Some((p, _)) if p.is_finite() => {
                 a = a.min(p);
@@ -172,7 +182,7 @@ fn march_segment(
     step: f32,
 ) -> Pixel {
     let m = volume.spec.metavoxel_edge as usize;
-    let last = (m - 1) as f32;
+    let last = (m - 1) as i32;
     let att = volume.attenuation;
     let mut px = Pixel::EMPTY;
     let mut n = (t0 / step - 0.5).ceil().max(0.0);
@@ -182,8 +192,14 @@ fn march_segment(
             break;
         }
         if t >= t0 {
-            let l = (o + d * t - base).floor().clamp(Vec3::ZERO, Vec3::splat(last));
-            let v = voxels[(l.z as usize * m + l.y as usize) * m + l.x as usize];
+            // Truncation clamped at 0 is the floor clamped at 0 (NaN reads voxel 0 either way).
+            let l = o + d * t - base;
+            let (x, y, z) = (
+                (l.x as i32).clamp(0, last),
+                (l.y as i32).clamp(0, last),
+                (l.z as i32).clamp(0, last),
+            );
+            let v = voxels[(z as usize * m + y as usize) * m + x as usize];
             if v.w > 0.0 {
                 let b = att.transmittance(v.w * step);
                 px.color += v.truncate() * (px.t * (1.0 - b));
@@ -209,11 +225,14 @@ pub fn render(
         return render_exact(volume, camera, options, depth);
     }
     let frame = check(camera, options, depth)?;
-    let order = sort_order(volume, frame.eye);
-    let rects: Vec<[u32; 4]> = order
-        .iter()
-        .map(|&(i, _)| screen_rect(volume, &frame, volume.metavoxels[i].coord))
+    // Metavoxels the fill wrote nothing into are skipped (they would add nothing).
+    let order: Vec<(usize, bool)> = sort_order(volume, frame.eye)
+        .into_iter()
+        .filter(|&(i, _)| !volume.metavoxels[i].is_empty())
         .collect();
+    let boxes: Vec<(Vec3, Vec3)> =
+        order.iter().map(|&(i, _)| march_box(volume, &volume.metavoxels[i])).collect();
+    let rects: Vec<[u32; 4]> = boxes.iter().map(|&b| screen_rect(volume, &frame, b)).collect();
     let f = &volume.spec.frame;
     let o = f.to_voxel(frame.eye);
     let m = volume.spec.metavoxel_edge as f32;
@@ -225,7 +244,7 @@ pub fn render(
         let dirs: Vec<Vec3> = (0..w)
             .map(|x| f.dir_to_voxel(frame.ray_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5))))
             .collect();
-        for (&(i, over), rect) in order.iter().zip(&rects) {
+        for ((&(i, over), rect), &(lo, hi)) in order.iter().zip(&rects).zip(&boxes) {
             if (y as u32) < rect[1] || (y as u32) >= rect[3] {
                 continue;
             }
@@ -233,7 +252,12 @@ pub fn render(
             let base = Vec3::new(mv.coord[0] as f32, mv.coord[1] as f32, mv.coord[2] as f32) * m;
             for x in rect[0] as usize..rect[2] as usize {
                 let d = dirs[x];
-                let Some((t0, t1)) = slab(o, d.recip(), base, base + m) else { continue };
+                // The segment within the metavoxel (which decides the sample set, as before),
+                // clipped to its marched box.
+                let inv = d.recip();
+                let Some((t0, t1)) = slab(o, inv, base, base + m) else { continue };
+                let Some((b0, b1)) = slab(o, inv, lo, hi) else { continue };
+                let (t0, t1) = (t0.max(b0), t1.min(b1));
                 let t1 = t1.min(limit(depth, y * w + x));
                 let t0 = t0.max(0.0);
                 if t0 >= t1 {

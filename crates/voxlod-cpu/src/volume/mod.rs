@@ -282,6 +282,18 @@ pub struct Metavoxel {
     /// `M²` transmittances toward the light at the top of each voxel column (index `b·M + a`),
     /// the volume only (no scene shadow): what [`Volume::transmittance_to_light`] continues.
     pub light_top: Vec<f32>,
+    /// The box of the voxels the fill wrote, local voxel coordinates `[lo, hi)` per axis
+    /// (`[0; 3], [0; 3]` when none): every voxel outside it is zero, so propagation and the
+    /// march skip it (empty-space skipping).
+    pub occupied: [[u32; 3]; 2],
+}
+
+impl Metavoxel {
+    /// Whether the fill wrote no voxel (it holds particles whose spheres miss every centre).
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.occupied[0][0] >= self.occupied[1][0]
+    }
 }
 
 /// A built volume: the kept metavoxels, filled and lit, column-major and top to bottom.

@@ -75,25 +75,39 @@ pub fn propagate(
         let mut carry = vec![1.0f32; m * m];
         for (mv, emission) in column.iter_mut() {
             mv.light_top.copy_from_slice(&carry);
+            if mv.is_empty() && emission.is_none() {
+                continue; // all voxels zero: nothing to light, the light passes unchanged
+            }
+            // Outside the occupied box every voxel is zero: it stays zero and passes the light
+            // unchanged (transmittance of τ = 0 is exactly 1), so only the box is walked.
+            let [lo, hi] = mv.occupied;
             let z0 = mv.coord[2] as usize * m;
-            for (col, light) in carry.iter_mut().enumerate() {
-                let hit = shadow.as_ref().map_or(f32::INFINITY, |s| s[col]);
-                for c in 0..m {
-                    let index = c * m * m + col;
-                    let v = mv.voxels[index];
-                    let tau = v.w * vs;
-                    let t = att.transmittance(tau);
-                    let reach = match att {
-                        Attenuation::Exact => *light * mean_decay(tau),
-                        _ => *light,
-                    };
-                    let visible = if ((z0 + c) as f32 + 0.5) < hit { 1.0 } else { 0.0 };
-                    let mut rgb = v.truncate() * (direct * (reach * visible) + ambient);
-                    if let Some(e) = emission {
-                        rgb += e[index];
+            for b in lo[1] as usize..hi[1] as usize {
+                for a in lo[0] as usize..hi[0] as usize {
+                    let col = b * m + a;
+                    let light = &mut carry[col];
+                    let hit = shadow.as_ref().map_or(f32::INFINITY, |s| s[col]);
+                    for c in lo[2] as usize..hi[2] as usize {
+                        let index = c * m * m + col;
+                        let v = mv.voxels[index];
+                        let e = emission.as_ref().map_or(Vec3::ZERO, |e| e[index]);
+                        if v == Vec4::ZERO && e == Vec3::ZERO {
+                            continue; // the same zero voxel and unchanged light, without exp
+                        }
+                        let tau = v.w * vs;
+                        let t = att.transmittance(tau);
+                        let reach = match att {
+                            Attenuation::Exact => *light * mean_decay(tau),
+                            _ => *light,
+                        };
+                        let visible = if ((z0 + c) as f32 + 0.5) < hit { 1.0 } else { 0.0 };
+                        let mut rgb = v.truncate() * (direct * (reach * visible) + ambient);
+                        if emission.is_some() {
+                            rgb += e;
+                        }
+                        mv.voxels[index] = Vec4::from((rgb, v.w));
+                        *light *= t;
                     }
-                    mv.voxels[index] = Vec4::from((rgb, v.w));
-                    *light *= t;
                 }
             }
             *emission = None;

@@ -103,18 +103,87 @@ fn binning_matches_brute_force() {
 fn fill_early_accept_and_reject_equal_the_unaccelerated_fill() {
     let spheres = cloud(60, 2, 3.0);
     let map = map();
-    let spec = spec(LIGHT, 2, 8);
-    let binning = bin(&spheres, &spec);
-    let prepared = prepare(&spheres, &spec);
-    let mut covered = 0;
-    for b in &binning.bins {
-        let (mv, emission) = fill(&spheres, &prepared, &map, &spec, b);
-        let (voxels, emission_ref) = fill_unaccelerated(&spheres, &prepared, &map, &spec, b.coord);
-        assert_eq!(mv.voxels, voxels, "metavoxel {:?}", b.coord);
-        assert_eq!(emission, emission_ref, "metavoxel {:?}", b.coord);
-        covered += voxels.iter().filter(|v| v.w > 0.0).count();
+    // One slab per metavoxel (M = 8), and several with a partial last one (M = 20).
+    for (k, m) in [(2, 8), (1, 20)] {
+        let spec = spec(LIGHT, k, m);
+        let binning = bin(&spheres, &spec);
+        let prepared = prepare(&spheres, &spec);
+        let mut covered = 0;
+        for b in &binning.bins {
+            let (mv, emission) = fill(&spheres, &prepared, &map, &spec, b);
+            let (voxels, emission_ref) =
+                fill_unaccelerated(&spheres, &prepared, &map, &spec, b.coord);
+            let bits =
+                |v: &[Vec4]| v.iter().map(|x| x.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            assert_eq!(bits(&mv.voxels), bits(&voxels), "metavoxel {:?} M {m}", b.coord);
+            assert_eq!(emission, emission_ref, "metavoxel {:?} M {m}", b.coord);
+            covered += voxels.iter().filter(|v| v.w > 0.0).count();
+            // Every voxel written lies in the occupied box.
+            let [lo, hi] = mv.occupied;
+            let m = m as usize;
+            for (i, v) in voxels.iter().enumerate() {
+                let e = emission_ref.as_ref().map_or(Vec3::ZERO, |e| e[i]);
+                if *v != Vec4::ZERO || e != Vec3::ZERO {
+                    let q = [i % m, i / m % m, i / (m * m)];
+                    assert!(
+                        (0..3).all(|a| lo[a] as usize <= q[a] && q[a] < hi[a] as usize),
+                        "voxel {q:?} outside the occupied box {lo:?}..{hi:?}"
+                    );
+                }
+            }
+        }
+        assert!(covered > 200, "the test covers voxels: {covered}");
     }
-    assert!(covered > 200, "the test covers voxels: {covered}");
+}
+
+/// The volume with every metavoxel's occupied box the whole metavoxel: propagation and the
+/// march then walk every voxel, as without empty-space skipping.
+fn without_skipping(mut mvs: Vec<Metavoxel>, m: u32) -> Vec<Metavoxel> {
+    for mv in &mut mvs {
+        mv.occupied = [[0; 3], [m; 3]];
+    }
+    mvs
+}
+
+#[test]
+fn empty_space_skipping_changes_no_bit() {
+    let mut spheres = cloud(40, 9, 4.0);
+    // A particle whose bounding sphere reaches a metavoxel without covering a voxel centre
+    // there (an occupied but empty metavoxel).
+    spheres.push(sphere(Vec3::new(0.05, -0.4, 0.1), 0.01, 0.0, 2.0));
+    let map = map();
+    let camera = Camera::look_at(Vec3::new(0.4, 0.9, 3.5), Vec3::ZERO, Vec3::Y, 40.0);
+    for att in [Attenuation::Chapter, Attenuation::BeerLambert, Attenuation::Exact] {
+        let spec = spec(LIGHT, 3, 8);
+        let settings = settings(att);
+        // Propagation: the same voxels and light with and without the boxes.
+        let binning = bin(&spheres, &spec);
+        let prepared = prepare(&spheres, &spec);
+        let filled: Vec<(Metavoxel, Option<Vec<Vec3>>)> =
+            binning.bins.iter().map(|b| fill(&spheres, &prepared, &map, &spec, b)).collect();
+        assert!(filled.iter().any(|(mv, _)| mv.is_empty()), "an empty metavoxel is tested");
+        let mut full: Vec<(Metavoxel, Option<Vec<Vec3>>)> = filled
+            .iter()
+            .map(|(mv, e)| (without_skipping(vec![mv.clone()], 8).remove(0), e.clone()))
+            .collect();
+        let mut skipped = filled.clone();
+        propagate::propagate(&mut skipped, &spec, &settings, None);
+        propagate::propagate(&mut full, &spec, &settings, None);
+        for ((a, _), (b, _)) in skipped.iter().zip(&full) {
+            assert_eq!(a.voxels, b.voxels, "{att:?} metavoxel {:?}", a.coord);
+            assert_eq!(a.light_top, b.light_top, "{att:?} metavoxel {:?}", a.coord);
+        }
+        // March: the same image with and without the boxes, from outside and inside.
+        let v = build(&spheres, &map, &spec, &settings, None, None).unwrap();
+        let mut w = v.clone();
+        w.metavoxels = without_skipping(w.metavoxels, 8);
+        for cam in [camera, Camera::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::ZERO, Vec3::Y, 70.0)] {
+            let a = render(&v, &cam, &opts(48, 0.7), None).unwrap();
+            let b = render(&w, &cam, &opts(48, 0.7), None).unwrap();
+            assert_eq!(a.pixels, b.pixels, "{att:?}");
+            assert!(a.pixels.iter().any(|p| p.w > 0.01), "the image shows the volume");
+        }
+    }
 }
 
 #[test]

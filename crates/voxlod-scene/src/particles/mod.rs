@@ -236,7 +236,7 @@ impl DisplacedSphere {
 
     /// The displacement `n ∈ [0, 1]` in the direction of `offset` (from the centre), the
     /// direction first rotated by the particle's spin about +y.
-    #[inline]
+    #[inline(always)]
     pub fn displacement(&self, map: &DisplacementMap, offset: Vec3) -> f32 {
         let (c, s) = (self.rot_cos, self.rot_sin);
         map.sample(Vec3::new(c * offset.x + s * offset.z, offset.y, c * offset.z - s * offset.x))

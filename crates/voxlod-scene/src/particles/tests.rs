@@ -110,6 +110,27 @@ fn cube_map_is_continuous_bounded_and_consistent_with_its_texels() {
 }
 
 #[test]
+fn cube_map_sample_equals_the_plain_lookup_bit_for_bit() {
+    for size in [1, 2, 16, 32] {
+        let map = DisplacementMap::noise(5, size, 3.0, 4).unwrap();
+        let mut rng = crate::procedural::Rng::new(size as u64);
+        let mut dirs: Vec<Vec3> =
+            (0..20_000).map(|_| rng.unit_vector() * rng.range(0.01, 40.0)).collect();
+        // Ties between axes, axes of both signs, the zero vector, signed zeros, non-finite.
+        for a in [0.0f32, -0.0, 1.0, -1.0, 0.5, -2.0] {
+            for b in [0.0f32, -0.0, 1.0, -1.0, 2.0] {
+                for c in [0.0f32, 1.0, -1.0, f32::NAN, f32::INFINITY] {
+                    dirs.extend([Vec3::new(a, b, c), Vec3::new(c, a, b), Vec3::new(b, c, a)]);
+                }
+            }
+        }
+        for d in dirs {
+            assert_eq!(map.sample(d).to_bits(), map.sample_plain(d).to_bits(), "at {d}");
+        }
+    }
+}
+
+#[test]
 fn presets_are_deterministic_valid_and_sized() {
     let a = smoke_column(&SmokeParams { count: 500, ..Default::default() }).unwrap();
     let b = smoke_column(&SmokeParams { count: 500, ..Default::default() }).unwrap();
