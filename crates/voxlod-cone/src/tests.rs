@@ -267,6 +267,29 @@ fn injection_lights_facing_leaves_and_marches_shadows() {
 }
 
 #[test]
+fn shadow_march_stops_at_a_point_light_just_below_a_ceiling() {
+    // The Cornell box's light hangs 1.1 voxels below its ceiling's voxel centres (at 32³):
+    // nothing lies between the floor and the light, so the marched visibility of a floor leaf
+    // under it must be 1 (exact: no occupied voxel's trilinear support meets the ray). The
+    // march used to run its full centre-to-light distance from the offset apex, 1.5 voxels
+    // past the light and into the ceiling, and injected V ≈ 0 there.
+    let n = 32;
+    let ceiling: Vec<_> = (0..n)
+        .flat_map(|x| (0..n).map(move |z| (UVec3::new(x, n - 1, z), white(Vec3::NEG_Y))))
+        .collect();
+    let geometry = floor(n, &ceiling);
+    let light =
+        Light::Point { position: Vec3::new(16.5, 30.4, 16.5), intensity: Vec3::splat(900.0) };
+    let marched: Octree<RadiancePayload> = inject(&geometry, &light, &Shadows::MARCH).unwrap();
+    let open: Octree<RadiancePayload> = inject(&geometry, &light, &Shadows::None).unwrap();
+    let at = |t: &Octree<RadiancePayload>, c: UVec3| t.sample(c.as_vec3() + 0.5, 1.0).radiance();
+    for c in [UVec3::new(16, 0, 16), UVec3::new(4, 0, 20), UVec3::new(16, 31, 16)] {
+        let (m, o) = (at(&marched, c), at(&open, c));
+        assert!(o.x > 0.0 && ((m - o).abs() / o).max_element() < 1e-4, "leaf {c}: {m} vs {o}");
+    }
+}
+
+#[test]
 fn injection_cache_reinjects_only_on_change() {
     let geometry = floor(16, &[]);
     let light = Light::Directional { to_light: Vec3::Y, irradiance: Vec3::ONE };
