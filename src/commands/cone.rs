@@ -5,8 +5,9 @@
 //!
 //! Pipeline per resolution: conservative voxelization → Averages records (32 lines per voxel) →
 //! octree ([`Octree::from_brick_map`], depth = log2 of the resolution) → light injection
-//! (shadows marched in the octree) → per option set, AO and `albedo · E/π` from the pixel-centre
-//! G-buffer → MSE and SSIM against the references (`voxlod_cpu::render::indirect`, `--spp`
+//! (shadows marched in the octree) into an isotropic and a directional radiance octree → per
+//! option set and octree, AO and `albedo · E/π` from the pixel-centre G-buffer → MSE and SSIM
+//! against the references (`voxlod_cpu::render::indirect`, `--spp`
 //! rays, seed 0; seed 1 measures the references' own noise).
 
 use std::time::Instant;
