@@ -5,8 +5,9 @@
 //!
 //! Pipeline per resolution: conservative voxelization → Averages records (32 lines per voxel) →
 //! octree ([`Octree::from_brick_map`], depth = log2 of the resolution) → light injection
-//! (shadows marched in the octree) → per option set, AO and `albedo · E/π` from the pixel-centre
-//! G-buffer → MSE and SSIM against the references (`voxlod_cpu::render::indirect`, `--spp`
+//! (shadows marched in the octree) into an isotropic and a directional radiance octree → per
+//! option set and octree, AO and `albedo · E/π` from the pixel-centre G-buffer → MSE and SSIM
+//! against the references (`voxlod_cpu::render::indirect`, `--spp`
 //! rays, seed 0; seed 1 measures the references' own noise).
 
 use std::time::Instant;
@@ -25,7 +26,7 @@ use voxlod::cpu::voxelize;
 use voxlod::eval::report::{Cell, Column, NumberFormat, Plot, Report, Series, Table};
 use voxlod::format::GridSpec;
 use voxlod::scene::{Image, Srgb8Image};
-use voxlod_cone::{ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
+use voxlod_cone::{ConeMedium, ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
 use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree};
 
 use super::{Ui, load_scene, print_json};
@@ -36,6 +37,9 @@ use crate::cli::ConeArgs;
 pub struct ConeRow {
     /// Voxels along the longest axis.
     pub resolution: u32,
+    /// Opacity pre-filter: "isotropic" (mean of the children) or "directional" (six
+    /// opacities composited along the axes).
+    pub opacity: String,
     /// Octree depth.
     pub depth: u32,
     /// Diffuse cones.
@@ -208,6 +212,8 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
         let t = Instant::now();
         let radiance: Octree<RadiancePayload> = inject(&tree, &light, &Shadows::MARCH)?;
         let inject_ms = ms(t);
+        let directional: Octree<Directional<RadiancePayload>> =
+            inject(&tree, &light, &Shadows::MARCH)?;
         let stats = radiance.memory_stats();
         octrees.push((
             res,
@@ -216,6 +222,7 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
             build_ms,
             inject_ms,
         ));
+        let refs = References { gb: &gb, hits, ao: &ao_ref_img, indirect: &ind_ref_img };
         for &cones in &args.cones {
             for &aperture in &args.apertures {
                 for &step in &args.steps {
@@ -227,55 +234,14 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
                         ao_radius: radius,
                         ..TraceOptions::default()
                     };
-                    let tracer = ConeTracer::new(&radiance, o).with_context(|| {
-                        format!("{cones} cones, aperture {aperture}°, step {step}")
-                    })?;
-                    let t = Instant::now();
-                    let out: Vec<(f32, Vec3, u32)> = gb
-                        .texels
-                        .par_iter()
-                        .map(|x| {
-                            if x.triangle == u32::MAX {
-                                (1.0, Vec3::ZERO, 0)
-                            } else {
-                                tracer.ao_and_diffuse(x.position, x.normal, true, true)
-                            }
-                        })
-                        .collect();
-                    let trace_ms = ms(t);
-                    let ao: Vec<f32> = out.iter().map(|o| o.0).collect();
-                    let e: Vec<Vec3> = out.iter().map(|o| o.1).collect();
-                    let steps: u64 = out.iter().map(|o| o.2 as u64).sum();
-                    // Geometry in view but not one octree sample: every cone left the octree's
-                    // cube at its apex. That happens when no surface sees another (a convex
-                    // scene such as builtin:cube, whose visible faces lie on the grid's
-                    // boundary): the references are then exactly AO 1 and no indirect light,
-                    // the cones agree with them trivially, and a row of MSE 0 / SSIM 1 would
-                    // report a measurement that was never made.
-                    ensure!(
-                        hits == 0 || steps > 0,
-                        "{}: no cone took an octree sample ({res}³, {cones} cones, {aperture}°, \
-                         step {step}) although {hits} pixels see geometry: no surface in view \
-                         sees another (a convex scene: AO 1 and no indirect light everywhere), \
-                         so there is nothing to measure; use a scene with occlusion, e.g. \
-                         builtin:cornell",
-                        args.scene
-                    );
-                    let ma = voxlod::eval::compare(&gray(&gb, &ao), &ao_ref_img)?;
-                    let mi = voxlod::eval::compare(&colour(&gb, &e), &ind_ref_img)?;
-                    rows.push(ConeRow {
-                        resolution: res,
-                        depth: radiance.depth(),
-                        cones,
-                        aperture_deg: aperture,
-                        step,
-                        ao_mse: ma.mse,
-                        ao_ssim: ma.ssim,
-                        indirect_mse: mi.mse,
-                        indirect_ssim: mi.ssim,
-                        trace_ms,
-                        steps_per_pixel: steps as f64 / gb.texels.len() as f64,
-                    });
+                    for opacity in OPACITIES {
+                        let row = if opacity == "isotropic" {
+                            measure(args, &radiance, o, &refs)?
+                        } else {
+                            measure(args, &directional, o, &refs)?
+                        };
+                        rows.push(ConeRow { resolution: res, opacity: opacity.into(), ..row });
+                    }
                 }
             }
         }
@@ -289,6 +255,78 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
         octrees,
         rows,
         leaks,
+    })
+}
+
+/// The two opacity pre-filters measured: the mean of the eight children (one opacity) and six
+/// directional opacities composited front to back along each axis.
+const OPACITIES: [&str; 2] = ["isotropic", "directional"];
+
+/// The references one option set is scored against.
+struct References<'a> {
+    gb: &'a GBuffer,
+    hits: usize,
+    ao: &'a Srgb8Image,
+    indirect: &'a Srgb8Image,
+}
+
+/// AO and `albedo · E/π` by cone tracing `radiance` with `o` from every pixel of the
+/// G-buffer, scored against the references (the row's resolution and opacity are the caller's).
+fn measure<M: ConeMedium + Sync>(
+    args: &ConeArgs,
+    radiance: &Octree<M>,
+    o: TraceOptions,
+    refs: &References,
+) -> Result<ConeRow> {
+    let (cones, aperture, step) = (o.diffuse_cones, o.diffuse_aperture_deg, o.step_factor);
+    let gb = refs.gb;
+    let tracer = ConeTracer::new(radiance, o)
+        .with_context(|| format!("{cones} cones, aperture {aperture}°, step {step}"))?;
+    let t = Instant::now();
+    let out: Vec<(f32, Vec3, u32)> = gb
+        .texels
+        .par_iter()
+        .map(|x| {
+            if x.triangle == u32::MAX {
+                (1.0, Vec3::ZERO, 0)
+            } else {
+                tracer.ao_and_diffuse(x.position, x.normal, true, true)
+            }
+        })
+        .collect();
+    let trace_ms = ms(t);
+    let ao: Vec<f32> = out.iter().map(|o| o.0).collect();
+    let e: Vec<Vec3> = out.iter().map(|o| o.1).collect();
+    let steps: u64 = out.iter().map(|o| o.2 as u64).sum();
+    // Geometry in view but not one octree sample: every cone left the octree's cube at its
+    // apex. That happens when no surface sees another (a convex scene such as builtin:cube,
+    // whose visible faces lie on the grid's boundary): the references are then exactly AO 1
+    // and no indirect light, the cones agree with them trivially, and a row of MSE 0 / SSIM 1
+    // would report a measurement that was never made.
+    ensure!(
+        refs.hits == 0 || steps > 0,
+        "{}: no cone took an octree sample ({cones} cones, {aperture}°, step {step}) although \
+         {} pixels see geometry: no surface in view sees another (a convex scene: AO 1 and no \
+         indirect light everywhere), so there is nothing to measure; use a scene with \
+         occlusion, e.g. builtin:cornell",
+        args.scene,
+        refs.hits
+    );
+    let ma = voxlod::eval::compare(&gray(gb, &ao), refs.ao)?;
+    let mi = voxlod::eval::compare(&colour(gb, &e), refs.indirect)?;
+    Ok(ConeRow {
+        resolution: 0,
+        opacity: String::new(),
+        depth: radiance.depth(),
+        cones,
+        aperture_deg: aperture,
+        step,
+        ao_mse: ma.mse,
+        ao_ssim: ma.ssim,
+        indirect_mse: mi.mse,
+        indirect_ssim: mi.ssim,
+        trace_ms,
+        steps_per_pixel: steps as f64 / gb.texels.len() as f64,
     })
 }
 
@@ -362,6 +400,7 @@ fn tables(o: &ConeOutcome) -> Result<Vec<Table>> {
         vec![
             num("res", NumberFormat::Integer),
             num("depth", NumberFormat::Integer),
+            Column::text("opacity"),
             num("cones", NumberFormat::Integer),
             num("aperture°", NumberFormat::Fixed(0)),
             num("step", NumberFormat::Fixed(2)),
@@ -374,10 +413,11 @@ fn tables(o: &ConeOutcome) -> Result<Vec<Table>> {
         ],
     );
     for r in &o.rows {
-        t.push_row(
+        let mut cells: Vec<Cell> =
+            [r.resolution as f64, r.depth as f64].into_iter().map(Cell::Number).collect();
+        cells.push(Cell::Text(r.opacity.clone()));
+        cells.extend(
             [
-                r.resolution as f64,
-                r.depth as f64,
                 r.cones as f64,
                 r.aperture_deg as f64,
                 r.step as f64,
@@ -389,9 +429,9 @@ fn tables(o: &ConeOutcome) -> Result<Vec<Table>> {
                 r.steps_per_pixel,
             ]
             .into_iter()
-            .map(Cell::Number)
-            .collect(),
-        )?;
+            .map(Cell::Number),
+        );
+        t.push_row(cells)?;
     }
     let mut l = Table::new(
         "light leaking through a wall 1/32 of the scene thick (truth 0)",
@@ -419,8 +459,8 @@ fn make_report(o: &ConeOutcome) -> Result<Report> {
     let mut r = Report::new(format!("voxel cone tracing: {}", o.scene));
     r.text(format!(
         "References: ray-traced AO and one-bounce path-traced diffuse indirect light on the mesh \
-         ({:.0} ms and {:.0} ms, CPU). Their own noise (MSE between seeds 0 and 1): AO {:.3}, \
-         indirect {:.3}; errors below these are not resolved. Octrees (res, voxels, bytes/voxel, \
+         ({:.0} ms and {:.0} ms, CPU). Their own noise (MSE between seeds 0 and 1): AO {:.5}, \
+         indirect {:.4}; errors below these are not resolved. Octrees (res, voxels, bytes/voxel, \
          build ms, injection ms): {:?}. Times are CPU times on a shared machine.",
         o.reference_ms[0],
         o.reference_ms[1],
@@ -431,32 +471,51 @@ fn make_report(o: &ConeOutcome) -> Result<Report> {
     for t in tables(o)? {
         r.table(t);
     }
-    let mut series = Vec::new();
-    let mut keys: Vec<(u32, u32)> =
-        o.rows.iter().map(|x| (x.resolution, x.aperture_deg as u32)).collect();
-    keys.dedup();
+    let mut keys: Vec<(u32, u32, &str)> =
+        o.rows.iter().map(|x| (x.resolution, x.aperture_deg as u32, x.opacity.as_str())).collect();
     keys.sort();
     keys.dedup();
-    for (res, ap) in keys {
-        let pts = o
-            .rows
-            .iter()
-            .filter(|x| x.resolution == res && x.aperture_deg as u32 == ap)
-            .map(|x| (x.trace_ms, x.ao_mse))
-            .collect();
-        series.push(Series::new(format!("{res}³, {ap}°"), pts));
+    let series = |metric: fn(&ConeRow) -> f64| -> Vec<Series> {
+        keys.iter()
+            .map(|&(res, ap, opacity)| {
+                let pts = o
+                    .rows
+                    .iter()
+                    .filter(|x| {
+                        x.resolution == res && x.aperture_deg as u32 == ap && x.opacity == opacity
+                    })
+                    .map(|x| (x.trace_ms, metric(x)))
+                    .collect();
+                Series::new(format!("{res}³, {ap}°, {opacity}"), pts)
+            })
+            .collect()
+    };
+    for (name, title, y_label, metric) in [
+        (
+            "cone_ao_error_vs_time",
+            "AO error vs cone tracing time",
+            "AO MSE (8-bit sRGB)",
+            (|x: &ConeRow| x.ao_mse) as fn(&ConeRow) -> f64,
+        ),
+        (
+            "cone_indirect_error_vs_time",
+            "indirect light error vs cone tracing time",
+            "indirect MSE (8-bit sRGB)",
+            |x: &ConeRow| x.indirect_mse,
+        ),
+    ] {
+        r.plot(
+            name,
+            Plot {
+                title: title.into(),
+                x_label: "trace time (ms, CPU)".into(),
+                y_label: y_label.into(),
+                log_x: true,
+                log_y: true,
+                series: series(metric),
+                ..Plot::default()
+            },
+        );
     }
-    r.plot(
-        "cone_ao_error_vs_time",
-        Plot {
-            title: "AO error vs cone tracing time".into(),
-            x_label: "trace time (ms, CPU)".into(),
-            y_label: "AO MSE (8-bit sRGB)".into(),
-            log_x: true,
-            log_y: true,
-            series,
-            ..Plot::default()
-        },
-    );
     Ok(r)
 }

@@ -31,7 +31,10 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 4, "{rows:?}");
+    // 2 resolutions × 2 cone counts × 2 opacity pre-filters (isotropic, directional).
+    assert_eq!(rows.len(), 8, "{rows:?}");
+    assert_eq!(rows[0]["opacity"], "isotropic");
+    assert_eq!(rows[1]["opacity"], "directional");
     for r in rows {
         let (mse, ssim) = (r["ao_mse"].as_f64().unwrap(), r["ao_ssim"].as_f64().unwrap());
         assert!(mse.is_finite() && mse >= 0.0 && ssim <= 1.0, "{r}");
@@ -41,7 +44,7 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     assert!(rows.iter().any(|r| r["ao_mse"].as_f64().unwrap() > 0.0), "{rows:?}");
     assert!(rows.iter().all(|r| r["ao_ssim"].as_f64().unwrap() < 1.0), "{rows:?}");
     assert_eq!(rows[0]["depth"], 3);
-    assert_eq!(rows[2]["depth"], 4);
+    assert_eq!(rows[4]["depth"], 4);
     let noise = v["reference_noise_mse"].as_array().unwrap();
     assert!(noise.iter().all(|x| x.as_f64().unwrap() >= 0.0));
     // Leaks: 3 depths × 1 step × 2 options, each a fraction in [0, 1].

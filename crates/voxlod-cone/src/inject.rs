@@ -100,8 +100,10 @@ pub enum Shadows<'a> {
     None,
     /// March the geometry octree itself toward the light: a ray (a cone of aperture 0, level 0,
     /// step `step_factor` voxels) from the leaf centre moved `offset_voxels` along the leaf's
-    /// normal (and along the light direction when the normal is zero), `V = 1 − A` with `A` its
-    /// accumulated opacity. Soft where the opacities are partial; its own leaks are the
+    /// normal (and along the light direction when the normal is zero), aimed at the light from
+    /// there and ending one voxel short of a point light (a voxel's trilinear support reaches
+    /// one voxel from its centre, so geometry just behind the light would otherwise shadow
+    /// it), `V = 1 − A` with `A` its accumulated opacity. Soft where the opacities are partial; its own leaks are the
     /// octree's.
     March {
         /// Start offset in voxels, ≥ 0 (1.5 as seed 000's shadow rays skip voxels closer than
@@ -192,7 +194,7 @@ pub fn inject<R: RadianceLeaf>(
         .enumerate()
         .map(|(i, &(c, p))| {
             let centre = grid.voxel_center(c).as_vec3();
-            let Some((l, e, dist)) = light.at(centre) else {
+            let Some((l, e, _)) = light.at(centre) else {
                 return (c, R::leaf(Vec3::ZERO, p.opacity));
             };
             let n = p.normal();
@@ -206,18 +208,23 @@ pub fn inject<R: RadianceLeaf>(
                 Shadows::March { offset_voxels, step_factor } => {
                     let side = if n == Vec3::ZERO { l } else { n };
                     let apex = centre + side * (offset_voxels * voxel);
+                    // Aim from the apex, and stop one voxel short of the light (module docs):
+                    // measured from the centre, the march overshot a point light by the offset
+                    // and read the geometry behind it (a ceiling above the light).
+                    let Some((dir, _, to_light)) = light.at(apex) else {
+                        return (c, R::leaf(out_radiance(&p, e, ndl, 1.0), p.opacity));
+                    };
                     let march = March {
                         start_voxels: 0.0,
                         step_factor,
-                        max_distance: dist,
+                        max_distance: (to_light - voxel).max(0.0),
                         opacity_cutoff: 0.999,
                         ao: None,
                     };
-                    1.0 - trace(geometry, &Cone { apex, dir: l, aperture: 0.0 }, &march).opacity
+                    1.0 - trace(geometry, &Cone { apex, dir, aperture: 0.0 }, &march).opacity
                 }
             };
-            let out = p.color() * std::f32::consts::FRAC_1_PI * e * (ndl * v);
-            (c, R::leaf(out, p.opacity))
+            (c, R::leaf(out_radiance(&p, e, ndl, v), p.opacity))
         })
         .collect();
     let options = BuildOptions {
@@ -225,6 +232,11 @@ pub fn inject<R: RadianceLeaf>(
         dense_log2: geometry.depth() - geometry.first_dense(),
     };
     Ok(Octree::build(grid, radiance, &options)?)
+}
+
+/// The injected outgoing radiance `albedo/π · E · max(n·l, 0) · V` (module docs).
+fn out_radiance(p: &AveragePayload, e: Vec3, ndl: f32, v: f32) -> Vec3 {
+    p.color() * std::f32::consts::FRAC_1_PI * e * (ndl * v)
 }
 
 /// Keeps the last radiance octree and re-injects only when the light, the shadow mode or the
