@@ -36,6 +36,7 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         views: args.views,
         section_budget: Duration::MAX,
         filtered: Some(filtered),
+        volume: None,
         ..Config::quick()
     };
     let spinner = ui.spinner();

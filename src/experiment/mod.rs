@@ -20,6 +20,7 @@ use voxlod_eval::report::{Report, Series};
 pub use baseline::{BaselineRow, SceneResult};
 pub use filtered::{FilteredConfig, FilteredResult, MethodRow};
 pub use views::orbit_views;
+pub use volume::{VolumeConfig, VolumeResult};
 
 use crate::Error;
 
@@ -59,6 +60,8 @@ pub struct Config {
     pub ambient: Vec3,
     /// The filtered-appearance comparison (None: the baseline only).
     pub filtered: Option<FilteredConfig>,
+    /// The procedural-volume section (issue 6) after the scenes (None: none).
+    pub volume: Option<VolumeConfig>,
 }
 
 impl Config {
@@ -75,6 +78,14 @@ impl Config {
             section_budget: Duration::from_secs(40),
             ambient: Vec3::splat(0.1),
             filtered: Some(FilteredConfig::quick()),
+            // The smoke column at its default particle count, 128³ voxels, 256² pixels.
+            volume: Some(VolumeConfig {
+                particles: 0,
+                resolution: 128,
+                image: 256,
+                mesh_spp: 16,
+                ..VolumeConfig::quick("smoke")
+            }),
         }
     }
 
@@ -87,6 +98,13 @@ impl Config {
             views: 4,
             section_budget: Duration::from_secs(900),
             filtered: Some(FilteredConfig::full()),
+            volume: Some(VolumeConfig {
+                particles: 0,
+                resolution: 256,
+                image: 512,
+                mesh_spp: 64,
+                ..VolumeConfig::quick("smoke")
+            }),
             ..Self::quick()
         }
     }
@@ -105,6 +123,8 @@ fn default_scenes() -> Vec<SceneCase> {
 pub struct Outcome {
     /// Results per scene, in order.
     pub scenes: Vec<SceneResult>,
+    /// The procedural-volume section's result, if the configuration asked for one.
+    pub volume: Option<VolumeResult>,
     /// The report (not yet written).
     pub report: Report,
     /// Wall time of the whole run.
@@ -123,7 +143,15 @@ pub fn run(config: &Config, progress: &(dyn Fn(&str) + Sync)) -> Result<Outcome,
         scenes.push(result);
     }
     summary_plots(&mut report, &scenes);
-    Ok(Outcome { scenes, report, elapsed: start.elapsed() })
+    let volume = match &config.volume {
+        Some(v) => {
+            let result = volume::run(v, progress)?;
+            volume::add_to_report(&mut report, &result)?;
+            Some(result)
+        }
+        None => None,
+    };
+    Ok(Outcome { scenes, volume, report, elapsed: start.elapsed() })
 }
 
 fn intro(config: &Config) -> String {

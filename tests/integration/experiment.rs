@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use glam::Vec3;
-use voxlod::experiment::{self, Config, FilteredConfig, SceneCase};
+use voxlod::experiment::{self, Config, FilteredConfig, SceneCase, VolumeConfig};
 
 fn tiny() -> Config {
     Config {
@@ -22,11 +22,24 @@ fn tiny() -> Config {
             heldout: 128,
             thresholds: vec![0.1, 1e9],
         }),
+        volume: Some(VolumeConfig {
+            preset: "smoke".into(),
+            particles: 150,
+            resolution: 32,
+            metavoxel_sizes: vec![8, 16],
+            image: 32,
+            mesh_spp: 2,
+        }),
     }
 }
 
-const METHODS: [&str; 4] =
-    ["Averages", "[VJK21]", "virtual mesh (lines)", "virtual mesh (circles)"];
+const METHODS: [&str; 5] = [
+    "Averages",
+    "[VJK21]",
+    "virtual mesh (lines)",
+    "virtual mesh (circles)",
+    "virtual mesh (lines × area)",
+];
 
 #[test]
 fn tiny_experiment_writes_a_consistent_report() {
@@ -77,6 +90,14 @@ fn tiny_experiment_writes_a_consistent_report() {
     for m in METHODS {
         assert!(md.contains(m), "{m} missing from the report");
     }
+    // The procedural-volume section: both attenuation models scored against the exact
+    // march, one row per metavoxel size, the sparse volume smaller than the dense one at M = 8.
+    let volume = outcome.volume.as_ref().expect("the volume section ran");
+    assert!(md.contains("Procedural volume: smoke"), "{md}");
+    assert_eq!(volume.sizes.len(), 2);
+    assert!(volume.attenuation.iter().all(|r| r.metrics.ssim > 0.5), "{:?}", volume.attenuation);
+    let m8 = &volume.sizes[0];
+    assert!(m8.occupied > 0 && m8.volume_bytes < m8.dense_bytes, "{m8:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
