@@ -457,6 +457,29 @@ fn tables(o: &ConeOutcome) -> Result<Vec<Table>> {
 
 fn make_report(o: &ConeOutcome) -> Result<Report> {
     let mut r = Report::new(format!("voxel cone tracing: {}", o.scene));
+    add_to_report(&mut r, o)?;
+    Ok(r)
+}
+
+/// The sweep and the leak experiment with `voxlod cone builtin:cornell`'s defaults (`--spp
+/// 1024` for the full report): the default report's cone-tracing section.
+pub fn report_outcome(full: bool, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
+    use clap::Parser;
+    let mut argv = vec!["voxlod", "cone", "builtin:cornell"];
+    if full {
+        argv.extend(["--spp", "1024"]);
+    }
+    let crate::cli::Command::Cone(args) =
+        crate::cli::Cli::try_parse_from(argv)?.command.context("the cone command parses")?
+    else {
+        anyhow::bail!("`voxlod cone` parsed as another command")
+    };
+    run(&args, say)
+}
+
+/// Appends the cone-tracing section (heading, references, tables, error-vs-time plots).
+pub fn add_to_report(r: &mut Report, o: &ConeOutcome) -> Result<()> {
+    r.heading(2, format!("Voxel cone tracing: {}", o.scene));
     r.text(format!(
         "References: ray-traced AO and one-bounce path-traced diffuse indirect light on the mesh \
          ({:.0} ms and {:.0} ms, CPU). Their own noise (MSE between seeds 0 and 1): AO {:.5}, \
@@ -517,5 +540,5 @@ fn make_report(o: &ConeOutcome) -> Result<Report> {
             },
         );
     }
-    Ok(r)
+    Ok(())
 }

@@ -9,10 +9,14 @@ use crate::cli::ReportArgs;
 /// Runs the default experiment, writes `<output>/report.md` (+ assets, JSON) and prints the
 /// tables.
 pub fn report(ui: &Ui, args: ReportArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     let config = if args.full { Config::full() } else { Config::quick() };
     let spinner = ui.spinner();
     let progress = |msg: &str| spinner.set_message(msg.to_string());
-    let outcome = experiment::run(&config, &progress).context("running the experiment")?;
+    let mut outcome = experiment::run(&config, &progress).context("running the experiment")?;
+    let cone = super::cone::report_outcome(args.full, &progress)
+        .context("running the cone-tracing section (builtin:cornell)")?;
+    super::cone::add_to_report(&mut outcome.report, &cone)?;
     spinner.set_message(format!("writing {}", args.output.display()));
     let written = outcome
         .report
@@ -29,7 +33,7 @@ pub fn report(ui: &Ui, args: ReportArgs) -> Result<()> {
     println!(
         "\nreport written to {} in {:.1} s",
         written.markdown.display(),
-        outcome.elapsed.as_secs_f64()
+        start.elapsed().as_secs_f64()
     );
     Ok(())
 }
