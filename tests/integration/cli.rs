@@ -146,8 +146,9 @@ fn compare_measures_every_representation_and_rejects_bad_arguments() {
     ]);
     let v = json(&out);
     let rows = v[0]["filtered"]["rows"].as_array().expect("rows");
-    // 4 fixed methods + 3 Adaptive thresholds, at 12² and 24².
-    assert_eq!(rows.len(), 14, "{rows:?}");
+    // 5 fixed methods (Averages, [VJK21], 3 virtual-mesh variants) + 3 Adaptive thresholds,
+    // at 12² and 24².
+    assert_eq!(rows.len(), 16, "{rows:?}");
     assert!(dir.join("report.md").exists());
 
     for (args, needle) in [
