@@ -70,6 +70,10 @@ pub struct SceneResult {
     /// JSON) on the CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gt_backend: Option<String>,
+    /// Whether that GPU adapter is a CPU implementation (lavapipe): its times are CPU timings
+    /// of the GPU path.
+    #[serde(skip)]
+    pub(crate) gpu_is_cpu: bool,
     /// The ground truth's own error: seed 1 against seed 0, over views.
     pub gt_noise: Vec<ImageMetrics>,
     /// One row per resolution that fit in the budget.
@@ -252,6 +256,7 @@ pub(super) fn run_scene(
         gt_ms: ms(gt_time) / views.len() as f64,
         gt_peak_bytes,
         gt_backend: row_backend,
+        gpu_is_cpu: kernels.is_some_and(|k| k.is_cpu),
         gt_noise,
         rows,
         skipped,
@@ -271,6 +276,15 @@ fn sci(s: Spread) -> String {
 }
 
 impl SceneResult {
+    /// What a reader must know about GPU times from a CPU adapter ("" otherwise).
+    fn cpu_adapter_note(&self) -> &'static str {
+        if self.gpu_is_cpu {
+            "; this adapter is a CPU implementation: CPU timings of the GPU path, not GPU speed"
+        } else {
+            ""
+        }
+    }
+
     /// The scene's results as a table (one row per resolution).
     pub fn table(&self) -> Result<Table, Error> {
         // A `backend` column only when a GPU was asked for: the CPU report is unchanged.
@@ -338,7 +352,8 @@ impl SceneResult {
             config.section_budget.as_secs(),
             self.gt_backend.as_ref().map_or(String::new(), |b| format!(
                 " Ground truth and baseline rendered on the GPU ({b}): times are those of the \
-                 GPU path, upload excluded."
+                 GPU path, upload excluded{}.",
+                self.cpu_adapter_note()
             )),
         ));
         report.table(self.table()?);
@@ -364,9 +379,9 @@ impl SceneResult {
             if let Some(b) = &self.gt_backend {
                 report.text(format!(
                     "Rows with backend `{b}` were rendered on the GPU, which keeps no per-voxel \
-                     cache: cold and warm are the same work timed twice (the first frame \
-                     includes any one-off driver cost). Rows with backend `cpu` have no GPU \
-                     kernel yet."
+                     cache: cold and warm are the same work timed twice (upload and pipeline \
+                     compilation excluded){}. Rows with backend `cpu` have no GPU kernel yet.",
+                    self.cpu_adapter_note()
                 ));
             }
             for table in f.tables(&self.label)? {
