@@ -16,4 +16,16 @@ pub enum Error {
     /// From voxlod-eval (metrics, reports).
     #[error(transparent)]
     Eval(#[from] voxlod_eval::Error),
+    /// From voxlod-gpu (adapter, kernels), when the GPU backend was asked for.
+    #[error(transparent)]
+    Gpu(#[from] voxlod_gpu::Error),
+    /// A scene the GPU backend cannot render (e.g. textured materials in the ground truth).
+    #[error("scene '{scene}' cannot be rendered on the GPU backend")]
+    GpuScene {
+        /// The scene's spec.
+        scene: String,
+        /// Why.
+        #[source]
+        source: voxlod_gpu::Error,
+    },
 }

@@ -172,6 +172,11 @@ pub struct CompareSceneArgs {
     /// Adaptive thresholds, comma-separated.
     #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',')]
     pub thresholds: Vec<f32>,
+    /// Where to render the images that have a GPU kernel (gpu: the ground truth — opaque
+    /// untextured materials, else an error —, the baseline, Averages and [VJK21]; the virtual
+    /// mesh and Adaptive stay on the CPU). Every row says which backend rendered it.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Output directory.
     #[arg(short, long, default_value = "out/compare")]
     pub output: PathBuf,

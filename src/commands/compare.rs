@@ -3,9 +3,9 @@
 use std::time::Duration;
 
 use anyhow::{Context, Result, ensure};
-use voxlod::experiment::{self, Config, FilteredConfig, SceneCase};
+use voxlod::experiment::{self, Backend, Config, FilteredConfig, SceneCase};
 
-use super::{Ui, print_json};
+use super::{Ui, backend, print_json};
 use crate::cli::CompareSceneArgs;
 
 /// Runs the comparison, writes `<output>/report.md` (+ images, plots, JSON) and prints the
@@ -39,9 +39,12 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         volume: None,
         ..Config::quick()
     };
+    // No adapter is an error, never a fall-back to the CPU.
+    let (gpu, backend_name) = backend(args.backend)?;
+    let on = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let spinner = ui.spinner();
     let progress = |msg: &str| spinner.set_message(msg.to_string());
-    let outcome = experiment::run(&config, &progress)
+    let outcome = experiment::run_on(&config, on, &progress)
         .with_context(|| format!("comparing representations of '{}'", args.scene))?;
     let written = outcome
         .report
@@ -50,6 +53,14 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
     spinner.finish_and_clear();
     if args.json {
         return print_json(&outcome.scenes);
+    }
+    if gpu.is_some() {
+        // The CPU run prints what it always did; a GPU run says which adapter rendered what.
+        println!("backend: {backend_name}");
+        println!(
+            "(ground truth, baseline, Averages and [VJK21] on the GPU; virtual mesh and Adaptive \
+             on the CPU: see each row's backend)"
+        );
     }
     for scene in &outcome.scenes {
         if let Some(f) = &scene.filtered {

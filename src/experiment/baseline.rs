@@ -12,6 +12,7 @@ use voxlod_format::GridSpec;
 use voxlod_scene::Srgb8Image;
 
 use super::filtered::{self, FilteredResult, SceneInputs};
+use super::gpu::Kernels;
 use super::{Config, GroundTruths, SceneCase, Spread, ms, orbit_views};
 use crate::{Error, alloc};
 
@@ -41,6 +42,10 @@ pub struct BaselineRow {
     pub mse: Spread,
     /// SSIM against the ground truth, over views.
     pub ssim: Spread,
+    /// What rendered the row: `cpu` or the GPU adapter's short name. None (and left out of
+    /// the JSON) in an all-CPU run, whose output is unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub backend: Option<String>,
 }
 
 /// Everything one scene section measured.
@@ -58,8 +63,17 @@ pub struct SceneResult {
     pub bvh_ms: f64,
     /// Mean ground-truth render time per view, ms.
     pub gt_ms: f64,
-    /// Heap bytes one ground-truth render held at its peak beyond what was live before.
+    /// Heap bytes one ground-truth render held at its peak beyond what was live before (None
+    /// on the GPU backend: device memory is not counted).
     pub gt_peak_bytes: Option<usize>,
+    /// What rendered the ground truth: the GPU adapter's short name; None (and left out of the
+    /// JSON) on the CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gt_backend: Option<String>,
+    /// Whether that GPU adapter is a CPU implementation (lavapipe): its times are CPU timings
+    /// of the GPU path.
+    #[serde(skip)]
+    pub(crate) gpu_is_cpu: bool,
     /// The ground truth's own error: seed 1 against seed 0, over views.
     pub gt_noise: Vec<ImageMetrics>,
     /// One row per resolution that fit in the budget.
@@ -81,10 +95,12 @@ fn ser_secs<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error>
     s.serialize_f64(d.as_secs_f64())
 }
 
-/// Runs one scene section.
-pub fn run_scene(
+/// Runs one scene section; with `kernels`, every image with a GPU kernel is rendered on the
+/// GPU.
+pub(super) fn run_scene(
     case: &SceneCase,
     config: &Config,
+    kernels: Option<&Kernels<'_>>,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<SceneResult, Error> {
     let start = Instant::now();
@@ -101,6 +117,15 @@ pub fn run_scene(
     let views = orbit_views(scene.default_camera()?, (lo + hi) * 0.5, config.views);
     let light = scene.light();
     let size = config.image_size;
+    // Upload outside the timed renders (like the BVH build); a refused scene names itself.
+    let gpu = match kernels {
+        Some(k) => {
+            progress(&format!("{label}: uploading the scene to the GPU"));
+            Some(k.upload_scene(&scene, &geometry, &bvh, &case.spec)?)
+        }
+        None => None,
+    };
+    let row_backend = kernels.map(|k| k.name.clone());
 
     let gt_options = |seed| ground_truth::Options {
         width: size,
@@ -117,13 +142,22 @@ pub fn run_scene(
     for (i, camera) in views.iter().enumerate() {
         progress(&format!("{label}: ground truth, view {}/{}", i + 1, views.len()));
         let t = Instant::now();
-        let (reference, peak) = alloc::measure_peak(|| {
-            ground_truth::render(&scene, &geometry, &bvh, camera, &gt_options(0))
-        });
+        let reference = match &gpu {
+            Some(g) => g.ground_truth(camera, &gt_options(0)),
+            None => {
+                let (reference, peak) = alloc::measure_peak(|| {
+                    ground_truth::render(&scene, &geometry, &bvh, camera, &gt_options(0))
+                });
+                gt_peak_bytes = gt_peak_bytes.max(peak);
+                reference.map_err(Error::from)
+            }
+        };
         gt_time += t.elapsed();
-        gt_peak_bytes = gt_peak_bytes.max(peak);
         let reference = reference?.image.to_srgb8();
-        let second = ground_truth::render(&scene, &geometry, &bvh, camera, &gt_options(1))?;
+        let second = match &gpu {
+            Some(g) => g.ground_truth(camera, &gt_options(1))?,
+            None => ground_truth::render(&scene, &geometry, &bvh, camera, &gt_options(1))?,
+        };
         gt_noise.push(compare(&second.image.to_srgb8(), &reference)?);
         gt.push(reference);
     }
@@ -149,6 +183,10 @@ pub fn run_scene(
         let records = baseline::build(&scene, &geometry, &vox)?;
         let build_ms = ms(t.elapsed());
         drop(vox);
+        let uploaded = match kernels {
+            Some(k) => Some(k.filtered.upload_baseline(&grid, &records)?),
+            None => None,
+        };
 
         let options =
             baseline::Options { width: size, height: size, ambient: config.ambient, shadows: true };
@@ -157,8 +195,12 @@ pub fn run_scene(
         for (i, camera) in views.iter().enumerate() {
             progress(&format!("{label}: baseline at {res}³, view {}/{}", i + 1, views.len()));
             let t = Instant::now();
-            let image =
-                baseline::render(&grid, &records, camera, &light, scene.background, &options)?;
+            let image = match (kernels, &uploaded) {
+                (Some(k), Some(u)) => {
+                    k.filtered.render_baseline(u, camera, &light, scene.background, &options)?
+                }
+                _ => baseline::render(&grid, &records, camera, &light, scene.background, &options)?,
+            };
             render_time += t.elapsed();
             let image = image.to_srgb8();
             metrics.push(compare(&image, &gt[i])?);
@@ -180,6 +222,7 @@ pub fn run_scene(
             render_ms: ms(render_time) / views.len() as f64,
             mse: Spread::of(&metrics.iter().map(|m| m.mse).collect::<Vec<_>>()),
             ssim: Spread::of(&metrics.iter().map(|m| m.ssim).collect::<Vec<_>>()),
+            backend: row_backend.clone(),
         });
     }
     if let (Some(image), Some(row)) = (finest, rows.last()) {
@@ -189,7 +232,8 @@ pub fn run_scene(
     let filtered = match &config.filtered {
         None => None,
         Some(fc) => {
-            let mut truths = GroundTruths::new(&scene, &geometry, &bvh, &views, config, label);
+            let mut truths =
+                GroundTruths::new(&scene, &geometry, &bvh, &views, config, label, gpu.as_ref());
             truths.insert(size, gt);
             let inputs = SceneInputs {
                 scene: &scene,
@@ -199,7 +243,8 @@ pub fn run_scene(
                 label,
             };
             let over_budget = || start.elapsed() > config.section_budget;
-            Some(filtered::run(&inputs, fc, &mut truths, &over_budget, progress)?)
+            let gpu = gpu.as_ref();
+            Some(filtered::run(&inputs, fc, &mut truths, gpu, &over_budget, progress)?)
         }
     };
     Ok(SceneResult {
@@ -210,6 +255,8 @@ pub fn run_scene(
         bvh_ms,
         gt_ms: ms(gt_time) / views.len() as f64,
         gt_peak_bytes,
+        gt_backend: row_backend,
+        gpu_is_cpu: kernels.is_some_and(|k| k.is_cpu),
         gt_noise,
         rows,
         skipped,
@@ -229,26 +276,38 @@ fn sci(s: Spread) -> String {
 }
 
 impl SceneResult {
+    /// What a reader must know about GPU times from a CPU adapter ("" otherwise).
+    fn cpu_adapter_note(&self) -> &'static str {
+        if self.gpu_is_cpu {
+            "; this adapter is a CPU implementation: CPU timings of the GPU path, not GPU speed"
+        } else {
+            ""
+        }
+    }
+
     /// The scene's results as a table (one row per resolution).
     pub fn table(&self) -> Result<Table, Error> {
-        let mut table = Table::new(
-            format!("{} baseline", self.label),
-            vec![
-                Column::text("method"),
-                Column::number("res", NumberFormat::Integer),
-                Column::number("voxels", NumberFormat::Integer),
-                Column::number("bytes/voxel", NumberFormat::Fixed(2)),
-                Column::number("memory (MiB)", NumberFormat::Fixed(3)),
-                Column::number("voxelize (ms)", NumberFormat::Fixed(1)),
-                Column::number("voxelize peak (MiB)", NumberFormat::Fixed(1)),
-                Column::number("build (ms)", NumberFormat::Fixed(1)),
-                Column::number("render/frame (ms)", NumberFormat::Fixed(1)),
-                Column::text("MSE mean (min–max)"),
-                Column::text("SSIM mean (min–max)"),
-            ],
-        );
+        // A `backend` column only when a GPU was asked for: the CPU report is unchanged.
+        let with_backend = self.rows.iter().any(|r| r.backend.is_some());
+        let mut columns = vec![
+            Column::text("method"),
+            Column::number("res", NumberFormat::Integer),
+            Column::number("voxels", NumberFormat::Integer),
+            Column::number("bytes/voxel", NumberFormat::Fixed(2)),
+            Column::number("memory (MiB)", NumberFormat::Fixed(3)),
+            Column::number("voxelize (ms)", NumberFormat::Fixed(1)),
+            Column::number("voxelize peak (MiB)", NumberFormat::Fixed(1)),
+            Column::number("build (ms)", NumberFormat::Fixed(1)),
+            Column::number("render/frame (ms)", NumberFormat::Fixed(1)),
+            Column::text("MSE mean (min–max)"),
+            Column::text("SSIM mean (min–max)"),
+        ];
+        if with_backend {
+            columns.push(Column::text("backend"));
+        }
+        let mut table = Table::new(format!("{} baseline", self.label), columns);
         for r in &self.rows {
-            table.push_row(vec![
+            let mut cells = vec![
                 "baseline (opaque cubes)".into(),
                 Cell::Number(r.resolution as f64),
                 Cell::Number(r.voxels as f64),
@@ -260,7 +319,11 @@ impl SceneResult {
                 Cell::Number(r.render_ms),
                 Cell::Text(r.mse.display(5)),
                 Cell::Text(r.ssim.display(4)),
-            ])?;
+            ];
+            if with_backend {
+                cells.push(Cell::Text(r.backend.clone().unwrap_or_else(|| "cpu".into())));
+            }
+            table.push_row(cells)?;
         }
         Ok(table)
     }
@@ -275,7 +338,7 @@ impl SceneResult {
              {} rays/pixel (peak {} beyond the scene and BVH). **Ground-truth noise** (seed 1 \
              against seed 0): MSE {}, 1 − SSIM {} — differences below this are not measurable \
              here. Section time {:.1} s \
-             (budget {} s).",
+             (budget {} s).{}",
             self.triangles,
             self.load_ms,
             self.bvh_ms,
@@ -287,6 +350,11 @@ impl SceneResult {
             sci(noise_ssim.map(|v| 1.0 - v)),
             self.elapsed.as_secs_f64(),
             config.section_budget.as_secs(),
+            self.gt_backend.as_ref().map_or(String::new(), |b| format!(
+                " Ground truth and baseline rendered on the GPU ({b}): times are those of the \
+                 GPU path, upload excluded{}.",
+                self.cpu_adapter_note()
+            )),
         ));
         report.table(self.table()?);
         if !self.skipped.is_empty() {
@@ -308,6 +376,14 @@ impl SceneResult {
                  (the same view again); bytes are per voxel with a record, the total including \
                  the sparse brick map.",
             );
+            if let Some(b) = &self.gt_backend {
+                report.text(format!(
+                    "Rows with backend `{b}` were rendered on the GPU, which keeps no per-voxel \
+                     cache: cold and warm are the same work timed twice (upload and pipeline \
+                     compilation excluded){}. Rows with backend `cpu` have no GPU kernel yet.",
+                    self.cpu_adapter_note()
+                ));
+            }
             for table in f.tables(&self.label)? {
                 report.text(format!("**{}**", table.name()));
                 report.table(table);

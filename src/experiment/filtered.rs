@@ -20,8 +20,10 @@ use voxlod_cpu::voxelize::{self, Mode};
 use voxlod_eval::report::{Cell, Column, LabeledImage, NumberFormat, Plot, Series, Table};
 use voxlod_eval::{compare, error_heatmap};
 use voxlod_format::GridSpec;
+use voxlod_gpu::filtered::GpuRecords;
 use voxlod_scene::{Camera, Geometry, Scene, Srgb8Image};
 
+use super::gpu::SceneGpu;
 use super::{GroundTruths, Spread, ms};
 use crate::Error;
 
@@ -88,6 +90,10 @@ pub struct MethodRow {
     pub ssim: Spread,
     /// For Adaptive: the share of voxels of each kind (Averages, \[VJK21\], virtual mesh).
     pub mix: Option<[f64; 3]>,
+    /// What rendered the row: `cpu` or the GPU adapter's short name. None (and left out of
+    /// the JSON) in an all-CPU run, whose output is unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub backend: Option<String>,
 }
 
 /// What the comparison of one scene produced.
@@ -107,6 +113,9 @@ pub struct FilteredResult {
 struct Built {
     method: String,
     grid: Box<dyn Appearance>,
+    /// The same records uploaded for the GPU kernel (Averages and \[VJK21\] on the GPU
+    /// backend): rendered there instead of from `grid`.
+    gpu: Option<GpuRecords>,
     record_bytes: f64,
     memory_bytes: usize,
     precompute: Duration,
@@ -128,6 +137,7 @@ pub(super) fn run(
     inputs: &SceneInputs<'_>,
     config: &FilteredConfig,
     gt: &mut GroundTruths<'_>,
+    gpu: Option<&SceneGpu<'_>>,
     over_budget: &dyn Fn() -> bool,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<FilteredResult, Error> {
@@ -144,7 +154,7 @@ pub(super) fn run(
         let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
         let vox = voxelize::voxelize(inputs.geometry, &grid, &options)?;
         let ctx = SamplingContext::new(inputs.scene, inputs.geometry, &vox)?;
-        let built = build_all(&ctx, config, &|m| progress(&format!("{label}: {res}³: {m}")))?;
+        let built = build_all(&ctx, config, gpu, &|m| progress(&format!("{label}: {res}³: {m}")))?;
         drop(ctx);
         drop(vox);
 
@@ -158,7 +168,7 @@ pub(super) fn run(
             let mut heat_maps = vec![LabeledImage::new("reference", references[0].clone())];
             for b in &built {
                 progress(&format!("{label}: {res}³ {}: rendering {size}²", b.method));
-                let (row, first) = render_row(inputs, b, res, size, &references)?;
+                let (row, first) = render_row(inputs, b, gpu, res, size, &references)?;
                 if size == res {
                     let heat = error_heatmap(&first, &references[0], 0.25)?;
                     figure.push(LabeledImage::new(b.method.clone(), first));
@@ -176,10 +186,12 @@ pub(super) fn run(
 }
 
 /// Precomputes every representation from the same samples (each timed on its own: its
-/// precompute time is sampling plus its fit).
+/// precompute time is sampling plus its fit); with `gpu`, uploads the records that have a GPU
+/// kernel (untimed).
 fn build_all(
     ctx: &SamplingContext<'_>,
     config: &FilteredConfig,
+    gpu: Option<&SceneGpu<'_>>,
     progress: &dyn Fn(&str),
 ) -> Result<Vec<Built>, Error> {
     let opts = PrecomputeOptions { rays: config.rays, ..Default::default() };
@@ -188,11 +200,13 @@ fn build_all(
     progress("Averages");
     let t = Instant::now();
     let g = precompute(ctx, &opts, averages::fit)?;
+    let precompute_time = t.elapsed();
     built.push(Built {
         method: "Averages".into(),
         record_bytes: g.record_bytes() as f64,
         memory_bytes: g.memory_bytes(),
-        precompute: t.elapsed(),
+        precompute: precompute_time,
+        gpu: gpu.map(|k| k.kernels.filtered.upload_averages(&g)).transpose()?,
         grid: Box::new(g),
         mix: None,
     });
@@ -200,11 +214,13 @@ fn build_all(
     progress("[VJK21]");
     let t = Instant::now();
     let g = precompute(ctx, &opts, sggx::fit)?;
+    let precompute_time = t.elapsed();
     built.push(Built {
         method: "[VJK21]".into(),
         record_bytes: g.record_bytes() as f64,
         memory_bytes: g.memory_bytes(),
-        precompute: t.elapsed(),
+        precompute: precompute_time,
+        gpu: gpu.map(|k| k.kernels.filtered.upload_vjk21(&g)).transpose()?,
         grid: Box::new(g),
         mix: None,
     });
@@ -225,6 +241,7 @@ fn build_all(
             memory_bytes: g.memory_bytes(),
             precompute: precompute_vm,
             grid: Box::new(grid),
+            gpu: None,
             mix: None,
         });
     }
@@ -245,16 +262,19 @@ fn build_all(
             precompute: candidates_time + t.elapsed(),
             mix: Some(g.mix()),
             grid: Box::new(g),
+            gpu: None,
         });
     }
     Ok(built)
 }
 
-/// Renders one representation from every view at `size`², cold then warm, and scores it.
+/// Renders one representation from every view at `size`², cold then warm, and scores it
+/// (on the GPU when its records were uploaded: no cache there, the same frame twice).
 /// Returns the row and the view-0 image.
 fn render_row(
     inputs: &SceneInputs<'_>,
     b: &Built,
+    gpu: Option<&SceneGpu<'_>>,
     res: u32,
     size: u32,
     references: &[Srgb8Image],
@@ -265,19 +285,33 @@ fn render_row(
     let (mut cold, mut warm) = (Duration::ZERO, Duration::ZERO);
     let mut metrics = Vec::new();
     let mut first = None;
+    let background = inputs.scene.background;
     for (camera, reference) in inputs.views.iter().zip(references) {
-        // The cache's voxel look-up is built per grid, not per frame; "cold" is the first
-        // frame with every per-voxel slot empty.
-        let mut cache = FrameCache::new(b.grid.as_ref())?;
-        let t = Instant::now();
-        let image =
-            filtered::render(&mut cache, camera, &light, inputs.scene.background, &options)?;
-        cold += t.elapsed();
-        let t = Instant::now();
-        let again =
-            filtered::render(&mut cache, camera, &light, inputs.scene.background, &options)?;
-        warm += t.elapsed();
-        drop(again);
+        let image = match (gpu, &b.gpu) {
+            (Some(k), Some(records)) => {
+                let kernel = &k.kernels.filtered;
+                let t = Instant::now();
+                let image = kernel.render(records, camera, &light, background, &options)?;
+                cold += t.elapsed();
+                let t = Instant::now();
+                drop(kernel.render(records, camera, &light, background, &options)?);
+                warm += t.elapsed();
+                image
+            }
+            _ => {
+                // The cache's voxel look-up is built per grid, not per frame; "cold" is the
+                // first frame with every per-voxel slot empty.
+                let mut cache = FrameCache::new(b.grid.as_ref())?;
+                let t = Instant::now();
+                let image = filtered::render(&mut cache, camera, &light, background, &options)?;
+                cold += t.elapsed();
+                let t = Instant::now();
+                let again = filtered::render(&mut cache, camera, &light, background, &options)?;
+                warm += t.elapsed();
+                drop(again);
+                image
+            }
+        };
         let image = image.to_srgb8();
         metrics.push(compare(&image, reference)?);
         first.get_or_insert(image);
@@ -298,6 +332,10 @@ fn render_row(
         mse: Spread::of(&metrics.iter().map(|m| m.mse).collect::<Vec<_>>()),
         ssim: Spread::of(&metrics.iter().map(|m| m.ssim).collect::<Vec<_>>()),
         mix: b.mix,
+        backend: gpu.map(|k| match b.gpu {
+            Some(_) => k.kernels.name.clone(),
+            None => "cpu".into(),
+        }),
     };
     Ok((row, first.expect("at least one view")))
 }
@@ -357,26 +395,29 @@ impl FilteredResult {
         let mut resolutions: Vec<u32> = self.rows.iter().map(|r| r.resolution).collect();
         resolutions.dedup();
         let mut tables = Vec::new();
+        // A `backend` column only when a GPU was asked for: the CPU report is unchanged.
+        let with_backend = self.rows.iter().any(|r| r.backend.is_some());
         for res in resolutions {
-            let mut table = Table::new(
-                format!("{label} filtered appearance {res}^3"),
-                vec![
-                    Column::text("method"),
-                    Column::number("image", NumberFormat::Integer),
-                    Column::number("voxels", NumberFormat::Integer),
-                    Column::number("record B/voxel", NumberFormat::Fixed(2)),
-                    Column::number("total B/voxel", NumberFormat::Fixed(2)),
-                    Column::number("memory (MiB)", NumberFormat::Fixed(3)),
-                    Column::number("precompute (ms)", NumberFormat::Fixed(0)),
-                    Column::number("render cold (ms)", NumberFormat::Fixed(1)),
-                    Column::number("render warm (ms)", NumberFormat::Fixed(1)),
-                    Column::text("MSE mean (min–max)"),
-                    Column::text("SSIM mean (min–max)"),
-                    Column::text("mix avg/vjk/vmesh"),
-                ],
-            );
+            let mut columns = vec![
+                Column::text("method"),
+                Column::number("image", NumberFormat::Integer),
+                Column::number("voxels", NumberFormat::Integer),
+                Column::number("record B/voxel", NumberFormat::Fixed(2)),
+                Column::number("total B/voxel", NumberFormat::Fixed(2)),
+                Column::number("memory (MiB)", NumberFormat::Fixed(3)),
+                Column::number("precompute (ms)", NumberFormat::Fixed(0)),
+                Column::number("render cold (ms)", NumberFormat::Fixed(1)),
+                Column::number("render warm (ms)", NumberFormat::Fixed(1)),
+                Column::text("MSE mean (min–max)"),
+                Column::text("SSIM mean (min–max)"),
+                Column::text("mix avg/vjk/vmesh"),
+            ];
+            if with_backend {
+                columns.push(Column::text("backend"));
+            }
+            let mut table = Table::new(format!("{label} filtered appearance {res}^3"), columns);
             for r in self.rows.iter().filter(|r| r.resolution == res) {
-                table.push_row(vec![
+                let mut cells = vec![
                     r.method.clone().into(),
                     Cell::Number(r.image as f64),
                     Cell::Number(r.voxels as f64),
@@ -396,7 +437,11 @@ impl FilteredResult {
                             m[2] * 100.0
                         ))
                     }),
-                ])?;
+                ];
+                if with_backend {
+                    cells.push(Cell::Text(r.backend.clone().unwrap_or_else(|| "cpu".into())));
+                }
+                table.push_row(cells)?;
             }
             tables.push(table);
         }

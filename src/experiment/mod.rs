@@ -9,6 +9,7 @@
 
 mod baseline;
 mod filtered;
+mod gpu;
 mod views;
 pub mod volume;
 
@@ -19,6 +20,7 @@ use voxlod_eval::report::{Report, Series};
 
 pub use baseline::{BaselineRow, SceneResult};
 pub use filtered::{FilteredConfig, FilteredResult, MethodRow};
+pub use gpu::{Backend, short_name};
 pub use views::orbit_views;
 pub use volume::{VolumeConfig, VolumeResult};
 
@@ -131,14 +133,36 @@ pub struct Outcome {
     pub elapsed: Duration,
 }
 
-/// Runs the experiment. `progress` receives a short message at each stage.
+/// Runs the experiment on the CPU. `progress` receives a short message at each stage.
 pub fn run(config: &Config, progress: &(dyn Fn(&str) + Sync)) -> Result<Outcome, Error> {
+    run_on(config, Backend::Cpu, progress)
+}
+
+/// Runs the experiment with the images that have a GPU kernel rendered on `backend` (see
+/// [`Backend`]); every row says which backend rendered it. With [`Backend::Cpu`] this is
+/// [`run`].
+pub fn run_on(
+    config: &Config,
+    backend: Backend<'_>,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Outcome, Error> {
     let start = Instant::now();
+    let kernels = match backend {
+        Backend::Cpu => None,
+        Backend::Gpu(ctx) => {
+            progress("compiling the GPU kernels");
+            Some(gpu::Kernels::new(ctx)?)
+        }
+    };
     let mut report = Report::new("voxlod report");
-    report.text(intro(config));
+    let mut text = intro(config);
+    if let Some(k) = &kernels {
+        text.push_str(&gpu_intro(k));
+    }
+    report.text(text);
     let mut scenes = Vec::new();
     for case in &config.scenes {
-        let result = baseline::run_scene(case, config, progress)?;
+        let result = baseline::run_scene(case, config, kernels.as_ref(), progress)?;
         result.write_section(&mut report, config)?;
         scenes.push(result);
     }
@@ -168,6 +192,24 @@ fn intro(config: &Config) -> String {
         size = config.image_size,
         spp = config.gt_spp,
         views = config.views,
+    )
+}
+
+fn gpu_intro(k: &gpu::Kernels<'_>) -> String {
+    format!(
+        " **Backend:** the images with a GPU kernel — the ground truth, the baseline, Averages \
+         and \\[VJK21\\] — were rendered on the GPU adapter {summary}; the virtual mesh and \
+         Adaptive have no GPU kernel and were rendered on the CPU. Every row's `backend` says \
+         which ({name} or cpu), and the times of GPU rows are times of the GPU path (upload and \
+         pipeline compilation excluded){cpu_note}.",
+        summary = k.summary,
+        name = k.name,
+        cpu_note = if k.is_cpu {
+            ": this adapter is a CPU implementation, so they are CPU timings of the GPU path, \
+             not GPU speed"
+        } else {
+            ""
+        },
     )
 }
 
@@ -254,6 +296,7 @@ pub(crate) struct GroundTruths<'a> {
     spp: u32,
     ambient: Vec3,
     label: &'a str,
+    gpu: Option<&'a gpu::SceneGpu<'a>>,
     by_size: Vec<(u32, Vec<voxlod_scene::Srgb8Image>)>,
 }
 
@@ -266,9 +309,10 @@ impl<'a> GroundTruths<'a> {
         views: &'a [voxlod_scene::Camera],
         config: &Config,
         label: &'a str,
+        gpu: Option<&'a gpu::SceneGpu<'a>>,
     ) -> Self {
         let (spp, ambient) = (config.gt_spp, config.ambient);
-        Self { scene, geometry, bvh, views, spp, ambient, label, by_size: Vec::new() }
+        Self { scene, geometry, bvh, views, spp, ambient, label, gpu, by_size: Vec::new() }
     }
 
     /// Keeps images rendered elsewhere (seed 0) for side `size`.
@@ -276,7 +320,8 @@ impl<'a> GroundTruths<'a> {
         self.by_size.push((size, images));
     }
 
-    /// The seed-0 ground truth of every view at `size`², rendered on first use.
+    /// The seed-0 ground truth of every view at `size`², rendered on first use (on the GPU when
+    /// the scene was uploaded to one).
     pub(crate) fn get(
         &mut self,
         size: u32,
@@ -301,13 +346,16 @@ impl<'a> GroundTruths<'a> {
                 i + 1,
                 self.views.len()
             ));
-            let gt = voxlod_cpu::render::ground_truth::render(
-                self.scene,
-                self.geometry,
-                self.bvh,
-                camera,
-                &options,
-            )?;
+            let gt = match self.gpu {
+                Some(gpu) => gpu.ground_truth(camera, &options)?,
+                None => voxlod_cpu::render::ground_truth::render(
+                    self.scene,
+                    self.geometry,
+                    self.bvh,
+                    camera,
+                    &options,
+                )?,
+            };
             images.push(gt.image.to_srgb8());
         }
         self.by_size.push((size, images));

@@ -53,7 +53,7 @@ type Slab = ([[u32; 3]; 2], Option<Vec<Vec3>>);
 /// x-span of each row that the outer sphere can reach (solved per row with a one-voxel margin,
 /// so that the per-voxel `d² > outer²` test, unchanged, still decides): the same voxels and the
 /// same arithmetic per voxel as the plain loop, so the same bits ([`fill_unaccelerated`]).
-/// Slabs of 8 layers (`SLAB_LAYERS`) run in parallel; each voxel still sees its particles in
+/// Slabs of `SLAB_LAYERS` (8) layers run in parallel; each voxel still sees its particles in
 /// particle order. The box of the voxels written is kept ([`Metavoxel::occupied`]) for the
 /// later stages.
 pub fn fill(

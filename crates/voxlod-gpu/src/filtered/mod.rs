@@ -36,9 +36,11 @@
 //! let image = kernel.render(&gpu, camera, light, glam::Vec3::ZERO, &options)?;
 //! # Ok(()) }
 //! ```
-//! `voxlod render`/`voxlod compare` of voxel representations do not take `--backend gpu` yet:
-//! this is the entry point they would call in place of
-//! [`voxlod_cpu::render::filtered::render`] (same inputs, same image up to the stated bound).
+//! `voxlod compare --backend gpu` calls it in place of [`voxlod_cpu::render::filtered::render`]
+//! and [`voxlod_cpu::render::baseline::render`] (same inputs, same image up to the stated
+//! bound) for its baseline, Averages and \[VJK21\] rows, and renders the virtual-mesh and
+//! Adaptive rows on the CPU; every row says which backend rendered it. `voxlod render` renders
+//! the ground truth only, not voxel representations.
 //!
 //! # No per-frame cache: why evaluating per hit gives the CPU's cached values
 //! The CPU caches per voxel a radiance, an opacity and a visibility. Each is a function of the
