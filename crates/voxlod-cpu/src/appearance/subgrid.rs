@@ -62,11 +62,13 @@ pub fn subcell_of(p: Vec3) -> usize {
 /// inside a sub-cell face (`d_k = 0` on a boundary) is booked in the cell above it
 /// (`⌊3·entry_k⌋`). Branch-free (per axis the three slab intervals, then 27 overlaps), since
 /// which cells a random line crosses is unpredictable.
-#[inline]
+#[inline(always)]
 pub fn crossed_subcells(entry: Vec3, d: Vec3, chord: f32) -> u32 {
     if chord.is_nan() || chord <= TOUCH {
         return 0;
     }
+    // The three reciprocals in one SIMD division (lane by lane the same `1/d_j`).
+    let inv = (Vec3A::ONE / Vec3A::from(d)).to_array();
     let (e, d) = (entry.to_array(), d.to_array());
     // Per axis, the three slab intervals [lo, hi] in SIMD lanes: the four boundary crossings
     // t = (b − e)·(1/d) of one axis at once, then min/max of neighbouring pairs.
@@ -80,8 +82,7 @@ pub fn crossed_subcells(entry: Vec3, d: Vec3, chord: f32) -> u32 {
             let lo = Vec3A::from_array(lo);
             return (lo, -lo);
         }
-        let inv = 1.0 / d[j];
-        let t = (Vec4::new(0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0) - Vec4::splat(e[j])) * inv;
+        let t = (Vec4::new(0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0) - Vec4::splat(e[j])) * inv[j];
         let (a, b) = (Vec3A::new(t.x, t.y, t.z), Vec3A::new(t.y, t.z, t.w));
         (a.min(b), a.max(b))
     };
