@@ -22,9 +22,9 @@ use rayon::prelude::*;
 use voxlod_scene::camera::CameraFrame;
 use voxlod_scene::{Camera, Geometry, Image, Scene};
 
-use super::check_image_size;
 use super::sampling::{Streams, stratified};
 use super::surface::{Lighting, MeshTracer, SurfacePoint};
+use super::{check_colour, check_image_size};
 use crate::raycast::Bvh;
 use crate::{Error, Result};
 
@@ -192,14 +192,7 @@ pub fn check_options(options: &Options) -> Result<()> {
             reason: "at least one ray per pixel".into(),
         });
     }
-    if !(ambient.is_finite() && ambient.min_element() >= 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "ambient",
-            value: ambient.to_string(),
-            reason: "must be finite and non-negative".into(),
-        });
-    }
-    Ok(())
+    check_colour("ambient", ambient)
 }
 
 /// The G-buffer alone, from one ray through each pixel centre (coverage 0 or 1): the cheap

@@ -35,6 +35,19 @@ pub const MAX_IMAGE_EDGE: u32 = 1 << 15;
 /// counters of the random streams, and the float image alone is then 4 GiB.
 pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 
+/// Checks a colour term of the shading (an ambient irradiance, a background): finite and
+/// non-negative in every channel; the error names it.
+pub fn check_colour(name: &'static str, v: glam::Vec3) -> Result<()> {
+    if !(v.is_finite() && v.min_element() >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name,
+            value: v.to_string(),
+            reason: "must be finite and non-negative".into(),
+        });
+    }
+    Ok(())
+}
+
 /// Checks an image size: both edges in `1..=MAX_IMAGE_EDGE`, at most `MAX_IMAGE_PIXELS`.
 pub fn check_image_size(width: u32, height: u32) -> Result<()> {
     let pixels = width as u64 * height as u64;

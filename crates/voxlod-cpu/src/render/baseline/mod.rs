@@ -32,9 +32,9 @@ use voxlod_format::{BrickMap, GridSpec};
 use voxlod_scene::{Camera, Image, Light, MaterialSample};
 
 use super::bricks::{BrickLookup, DenseBricks, voxel_index};
-use super::check_image_size;
 use super::dda::Dda;
 use super::sampling::PATTERN_4;
+use super::{check_colour, check_image_size};
 use crate::shading::shade;
 use crate::{Error, Result};
 
@@ -88,15 +88,8 @@ pub fn render(
             reason: format!("the grid has {} voxels", grid.dims),
         });
     }
-    for (name, v) in [("ambient", options.ambient), ("background", background)] {
-        if !(v.is_finite() && v.min_element() >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name,
-                value: v.to_string(),
-                reason: "must be finite and non-negative".into(),
-            });
-        }
-    }
+    check_colour("ambient", options.ambient)?;
+    check_colour("background", background)?;
     let frame = Frame { grid, voxels, light, background, options };
     Ok(match DenseBricks::new(voxels) {
         Some(dense) => frame.render(camera, &dense),

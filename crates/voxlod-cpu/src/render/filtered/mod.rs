@@ -56,9 +56,9 @@ use voxlod_format::GridSpec;
 use voxlod_scene::{Camera, Image, Light};
 
 use super::bricks::BrickLookup;
-use super::check_image_size;
 use super::dda::{Dda, DdaVoxel};
 use super::sampling::PATTERN_4;
+use super::{check_colour, check_image_size};
 use crate::appearance::{Appearance, Opacity};
 use crate::{Error, Result};
 use bounds::{LightBounds, ScreenTiles};
@@ -164,15 +164,8 @@ pub fn check_frame(
     check_image_size(options.width, options.height)?;
     camera.validate()?;
     let light = light.validated()?;
-    for (name, v) in [("ambient", options.ambient), ("background", background)] {
-        if !(v.is_finite() && v.min_element() >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name,
-                value: v.to_string(),
-                reason: "must be finite and non-negative".into(),
-            });
-        }
-    }
+    check_colour("ambient", options.ambient)?;
+    check_colour("background", background)?;
     Ok(light)
 }
 
