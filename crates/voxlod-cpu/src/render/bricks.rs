@@ -1,8 +1,11 @@
 //! Brick and voxel look-ups for the DDA: the [`BrickLookup`] trait (which bricks exist), a
-//! dense brick table ([`DenseBricks`]) that answers in one load instead of a hash probe, and
-//! [`voxel_index`], the occupied-voxel test inside a brick.
+//! dense brick table ([`DenseBricks`]) that answers in one load instead of a hash probe,
+//! [`voxel_index`], the occupied-voxel test inside a brick, and the [`VoxelOccupancy`] trait
+//! with its per-brick [`BrickMasks`] (which voxels and which 2³ blocks of a brick are
+//! occupied), with which [`Dda::next_occupied_voxel`](super::dda::Dda::next_occupied_voxel)
+//! visits only occupied voxels.
 
-use glam::UVec3;
+use glam::{UVec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, BrickMap, morton};
 
 /// Which 8³ bricks of a grid are allocated.
@@ -10,6 +13,109 @@ pub trait BrickLookup {
     /// Index of the brick at brick coordinate `brick` (voxel coordinate / 8) in the brick map's
     /// brick list, or `None` when it is not allocated or outside the grid.
     fn brick_index(&self, brick: UVec3) -> Option<u32>;
+
+    /// [`BrickLookup::brick_index`] of a brick coordinate held as integer-valued `f32` lanes
+    /// (as the DDA holds them), which the caller has checked lies inside the grid's bricks.
+    #[inline(always)]
+    fn brick_index_f(&self, brick: Vec3A) -> Option<u32> {
+        self.brick_index(brick.as_uvec3())
+    }
+}
+
+/// Which voxels of an allocated 8³ brick are occupied, at two granularities: voxels and the
+/// brick's 4×4×4 blocks of 2³ voxels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BrickMasks {
+    /// Bit `x + 8y` of word `z`: voxel `(x, y, z)` of the brick (local coordinates) is occupied.
+    pub voxels: [u64; 8],
+    /// Bit `bx + 4by + 16bz`: block `(bx, by, bz)` (voxels `2bx..2bx+1`, …) holds an occupied
+    /// voxel.
+    pub blocks: u64,
+}
+
+impl BrickMasks {
+    /// The masks of the voxels at local coordinates `local` (each component below 8).
+    pub fn from_local(local: impl IntoIterator<Item = UVec3>) -> Self {
+        let mut m = Self::default();
+        for l in local {
+            m.voxels[l.z as usize] |= 1 << (l.x | l.y << 3);
+            m.blocks |= 1 << Self::block_bit(l);
+        }
+        m
+    }
+
+    /// The bit of [`BrickMasks::blocks`] for the block holding local voxel `l`.
+    #[inline(always)]
+    pub fn block_bit(l: UVec3) -> u32 {
+        (l.x >> 1) | (l.y >> 1) << 2 | (l.z >> 1) << 4
+    }
+
+    /// Whether local voxel `l` is occupied.
+    #[inline(always)]
+    pub fn has_voxel(&self, l: UVec3) -> bool {
+        self.voxels[l.z as usize & 7] >> (l.x | l.y << 3) & 1 != 0
+    }
+
+    /// Whether the 2³ block holding local voxel `l` has an occupied voxel.
+    #[inline(always)]
+    pub fn has_block(&self, l: UVec3) -> bool {
+        self.blocks >> Self::block_bit(l) & 1 != 0
+    }
+
+    /// Whether the local voxel of linear index `i = x + 8y + 64z` is occupied.
+    #[inline(always)]
+    pub fn has_voxel_linear(&self, i: u32) -> bool {
+        self.voxels[(i >> 6) as usize & 7] >> (i & 63) & 1 != 0
+    }
+
+    /// Whether the 2³ block holding the local voxel of linear index `i = x + 8y + 64z` has
+    /// an occupied voxel: its bit `(x >> 1) + 4(y >> 1) + 16(z >> 1)` read off `i`'s bits.
+    #[inline(always)]
+    pub fn has_block_linear(&self, i: u32) -> bool {
+        let bit = (i >> 1 & 0x3) | (i >> 2 & 0xc) | (i >> 3 & 0x30);
+        self.blocks >> bit & 1 != 0
+    }
+}
+
+/// A [`BrickLookup`] that also knows which voxels of each allocated brick are occupied.
+pub trait VoxelOccupancy: BrickLookup {
+    /// The masks of the brick with index `brick` (as returned by
+    /// [`BrickLookup::brick_index`]).
+    fn masks(&self, brick: u32) -> &BrickMasks;
+}
+
+/// A brick look-up `L` with the [`BrickMasks`] of each of its bricks, by brick index.
+#[derive(Clone, Copy, Debug)]
+pub struct Occupancy<'a, L> {
+    /// Which bricks exist.
+    pub bricks: &'a L,
+    /// The masks of brick `i` at index `i`.
+    pub masks: &'a [BrickMasks],
+}
+
+impl<L: BrickLookup> BrickLookup for Occupancy<'_, L> {
+    #[inline(always)]
+    fn brick_index(&self, brick: UVec3) -> Option<u32> {
+        self.bricks.brick_index(brick)
+    }
+}
+
+impl<L: BrickLookup> VoxelOccupancy for Occupancy<'_, L> {
+    #[inline(always)]
+    fn masks(&self, brick: u32) -> &BrickMasks {
+        &self.masks[brick as usize]
+    }
+}
+
+/// The [`BrickMasks`] of every brick of `map`, by brick index.
+pub fn brick_masks<T>(map: &BrickMap<T>) -> Vec<BrickMasks> {
+    let mut coords = map.coords();
+    map.bricks()
+        .iter()
+        .map(|h| {
+            BrickMasks::from_local(coords.by_ref().take(h.count() as usize).map(|c| c % BRICK_EDGE))
+        })
+        .collect()
 }
 
 impl<T> BrickLookup for BrickMap<T> {
@@ -26,6 +132,8 @@ impl<T> BrickLookup for BrickMap<T> {
 #[derive(Clone, Debug)]
 pub struct DenseBricks {
     dims: UVec3,
+    /// `(1, x, x·y)` of `dims`, for [`BrickLookup::brick_index_f`].
+    strides: Vec3A,
     index: Vec<u32>,
 }
 
@@ -46,7 +154,8 @@ impl DenseBricks {
             let b = morton::decode(h.morton);
             index[Self::offset(dims, b)] = i as u32;
         }
-        Some(Self { dims, index })
+        let strides = Vec3A::new(1.0, dims.x as f32, (dims.x * dims.y) as f32);
+        Some(Self { dims, strides, index })
     }
 
     #[inline(always)]
@@ -67,6 +176,16 @@ impl BrickLookup for DenseBricks {
             return None;
         }
         let i = self.index[Self::offset(self.dims, brick)];
+        (i != u32::MAX).then_some(i)
+    }
+
+    /// The offset as one dot product in `f32` (exact: below [`DenseBricks::MAX_ENTRIES`] =
+    /// 2²⁴) and one conversion, instead of three. A coordinate outside the table (which the
+    /// caller promised against) still reads inside it or gets `None`, never out of bounds.
+    #[inline(always)]
+    fn brick_index_f(&self, brick: Vec3A) -> Option<u32> {
+        let offset = brick.dot(self.strides) as usize;
+        let i = *self.index.get(offset)?;
         (i != u32::MAX).then_some(i)
     }
 }
@@ -104,6 +223,10 @@ mod tests {
                 for z in 0..4 {
                     let b = UVec3::new(x, y, z);
                     assert_eq!(dense.brick_index(b), BrickLookup::brick_index(&map, b), "{b}");
+                    if b.cmplt((dims + 7) / 8).all() {
+                        let got = dense.brick_index_f(b.as_vec3a());
+                        assert_eq!(got, dense.brick_index(b), "{b}");
+                    }
                 }
             }
         }

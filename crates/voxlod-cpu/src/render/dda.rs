@@ -25,7 +25,7 @@
 use glam::{BVec3A, IVec3, UVec3, Vec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, GridSpec};
 
-use super::bricks::BrickLookup;
+use super::bricks::{BrickLookup, VoxelOccupancy};
 
 /// One voxel along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,6 +47,10 @@ pub struct DdaVoxel {
 
 /// The state of one ray's walk. Use it as an [`Iterator`] over every voxel, or call
 /// [`Dda::next_occupied_brick`] to skip empty bricks.
+///
+/// Cells, steps and bounds are kept as integer-valued `f32` lanes (exact: grid coordinates
+/// are below 2²¹, [`voxlod_format::morton::MAX_COORD`]), so a step is a handful of SIMD
+/// instructions; the plane expression and hence every `t` is the same as with integers.
 #[derive(Clone, Copy, Debug)]
 pub struct Dda {
     /// Ray origin in grid coordinates, moved to where the ray enters the grid.
@@ -55,24 +59,31 @@ pub struct Dda {
     inv: Vec3A,
     /// Direction in grid coordinates, with parallel components set to 0.
     dir: Vec3A,
-    step: IVec3,
+    /// −1, 0 or 1 per axis; as integers for the scalar paths.
+    step: Vec3A,
+    step_i: IVec3,
+    /// Axes with `step` 1.
+    up: BVec3A,
     /// Per axis, the offset from a cell to the plane the ray crosses next (1 for `step` 1,
     /// else 0), and whether the ray is parallel to the axis's planes: the three crossing
     /// times of a cell in SIMD lanes ([`Dda::next_crossing`]).
-    ahead: IVec3,
+    ahead: Vec3A,
     parallel: BVec3A,
-    dims: IVec3,
-    cell: IVec3,
+    /// Grid size in voxels and in bricks.
+    dims: Vec3A,
+    brick_dims: Vec3A,
+    cell: Vec3A,
     /// `t` relative to `origin` where the current voxel was entered.
     t: f32,
     /// Where the walk ends, relative to `origin`.
     t_end: f32,
     /// `t` of the world ray at `origin`.
     t_base: f32,
-    entry_normal: IVec3,
+    /// The axes whose planes the ray crossed into the current voxel (none: it started there).
+    entry_axes: u32,
     done: bool,
     /// The last brick looked up and its index (`u32::MAX`: unallocated).
-    cached_brick: IVec3,
+    cached_brick: Vec3A,
     cached_index: u32,
 }
 
@@ -83,21 +94,25 @@ impl Dda {
         let o = ((origin.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
         let d = dir / size;
         let dims = grid.dims.as_ivec3();
+        let dims_f = grid.dims.as_vec3a();
         let mut dda = Self {
             origin: o.into(),
             inv: Vec3A::ZERO,
             dir: Vec3A::ZERO,
-            step: IVec3::ZERO,
-            ahead: IVec3::ZERO,
+            step: Vec3A::ZERO,
+            step_i: IVec3::ZERO,
+            up: BVec3A::FALSE,
+            ahead: Vec3A::ZERO,
             parallel: BVec3A::FALSE,
-            dims,
-            cell: IVec3::ZERO,
+            dims: dims_f,
+            brick_dims: (dims_f * (1.0 / BRICK_EDGE as f32)).ceil(),
+            cell: Vec3A::ZERO,
             t: 0.0,
             t_end: 0.0,
             t_base: 0.0,
-            entry_normal: IVec3::ZERO,
+            entry_axes: 0,
             done: true,
-            cached_brick: IVec3::splat(-1),
+            cached_brick: Vec3A::splat(-1.0),
             cached_index: u32::MAX,
         };
         if !(o.is_finite() && d.is_finite() && t_min <= t_max) {
@@ -108,10 +123,12 @@ impl Dda {
         if d == Vec3::ZERO {
             return dda;
         }
-        dda.step = IVec3::select(parallel, IVec3::ZERO, d.signum().as_ivec3());
+        dda.step_i = IVec3::select(parallel, IVec3::ZERO, d.signum().as_ivec3());
+        dda.step = dda.step_i.as_vec3a();
+        dda.up = dda.step.cmpgt(Vec3A::ZERO);
         dda.inv = Vec3::select(parallel, Vec3::ZERO, d.recip()).into();
         dda.dir = d.into();
-        dda.ahead = IVec3::select(dda.step.cmpgt(IVec3::ZERO), IVec3::ONE, IVec3::ZERO);
+        dda.ahead = Vec3A::select(dda.up, Vec3A::ONE, Vec3A::ZERO);
         dda.parallel = BVec3A::new(parallel.x, parallel.y, parallel.z);
         // Clip [t_min, t_max] to the grid box; parallel axes must contain the origin.
         let (mut t0, mut t1) = (t_min, t_max);
@@ -146,12 +163,8 @@ impl Dda {
         dda.t_base = start;
         dda.t = t0 - start;
         dda.t_end = t1 - start;
-        let lo = IVec3::ZERO;
-        let hi = dims - 1;
-        dda.cell = dda.locate(dda.t, lo, hi);
-        if let Some(a) = entry_axis {
-            dda.entry_normal[a] = -dda.step[a];
-        }
+        dda.cell = dda.locate(dda.t, IVec3::ZERO, dims - 1).as_vec3a();
+        dda.entry_axes = entry_axis.map_or(0, |a| 1 << a);
         dda.done = false;
         dda
     }
@@ -165,7 +178,7 @@ impl Dda {
     /// `t` where the ray leaves `cell` along axis `a` (infinite for a parallel axis).
     #[inline(always)]
     fn next_t(&self, a: usize, cell: i32) -> f32 {
-        match self.step[a] {
+        match self.step_i[a] {
             1 => self.plane(a, cell + 1),
             -1 => self.plane(a, cell),
             _ => f32::INFINITY,
@@ -180,7 +193,7 @@ impl Dda {
         let p = self.origin + self.dir * t;
         let mut c = p.as_ivec3().clamp(lo, hi);
         for a in 0..3 {
-            let s = self.step[a];
+            let s = self.step_i[a];
             if s == 0 {
                 continue;
             }
@@ -198,25 +211,37 @@ impl Dda {
         c
     }
 
-    /// The earliest plane crossing after the current voxel: its `t` and the axes that cross
-    /// there (a bit mask).
+    /// The earliest plane crossing after `cell`: its `t` and the axes that cross there.
     #[inline(always)]
-    fn next_crossing(&self, cell: IVec3) -> (f32, u32) {
+    fn next_crossing(&self, cell: Vec3A) -> (f32, BVec3A) {
         // `next_t` of the three axes at once: lane by lane the same plane expression.
-        let k = (cell + self.ahead).as_vec3a();
-        let ts = Vec3A::select(self.parallel, Vec3A::INFINITY, (k - self.origin) * self.inv);
+        let ts = Vec3A::select(
+            self.parallel,
+            Vec3A::INFINITY,
+            (cell + self.ahead - self.origin) * self.inv,
+        );
         let t = ts.min_element();
-        (t, ts.cmpeq(Vec3A::splat(t)).bitmask())
+        (t, ts.cmpeq(Vec3A::splat(t)))
     }
 
-    /// Entry normal for crossing the planes of `axes` (the largest `|dir|` among them).
+    /// Whether `cell` lies outside the grid.
+    #[inline(always)]
+    fn outside(&self, cell: Vec3A) -> bool {
+        (cell.cmplt(Vec3A::ZERO) | cell.cmpge(self.dims)).any()
+    }
+
+    /// Entry normal for crossing the planes of `axes` (the largest `|dir|` among them; zero
+    /// for none).
     #[inline(always)]
     fn normal_for(&self, axes: u32) -> IVec3 {
         let mut n = IVec3::ZERO;
+        if axes == 0 {
+            return n;
+        }
         if axes.is_power_of_two() {
             // One axis crossed (all but edge and corner crossings): no choice to make.
             let a = axes.trailing_zeros() as usize;
-            n[a] = -self.step[a];
+            n[a] = -self.step_i[a];
             return n;
         }
         let mut best = 0;
@@ -227,7 +252,7 @@ impl Dda {
                 best_d = self.dir[a].abs();
             }
         }
-        n[best] = -self.step[best];
+        n[best] = -self.step_i[best];
         n
     }
 
@@ -239,86 +264,157 @@ impl Dda {
             voxel: self.cell.as_uvec3(),
             t_enter: self.t_base + self.t,
             t_exit: self.t_base + t_next.min(self.t_end),
-            entry_normal: self.entry_normal,
+            entry_normal: self.normal_for(self.entry_axes),
             brick,
         };
-        self.advance_to(t_next, axes, self.cell + self.step * axes_mask(axes));
+        self.advance(t_next, axes);
         v
     }
 
-    /// Moves to `cell`, entered at `t` through the planes of `axes`; ends the walk past the
-    /// grid or past `t_end`.
+    /// Crosses the planes of `axes` at `t` into the next voxel; ends the walk past the grid
+    /// or past `t_end`.
     #[inline(always)]
-    fn advance_to(&mut self, t: f32, axes: u32, cell: IVec3) {
-        if t >= self.t_end || cell.cmplt(IVec3::ZERO).any() || cell.cmpge(self.dims).any() {
+    fn advance(&mut self, t: f32, axes: BVec3A) {
+        let cell = self.cell + Vec3A::select(axes, self.step, Vec3A::ZERO);
+        if t >= self.t_end || self.outside(cell) {
             self.done = true;
             return;
         }
-        self.entry_normal = self.normal_for(axes);
+        self.entry_axes = axes.bitmask();
         self.cell = cell;
         self.t = t;
     }
 
-    /// The next voxel whose brick `lookup` reports allocated, walking brick by brick over
-    /// unallocated bricks (one step and one look-up per brick); `None` at the end of the ray.
+    /// The brick holding the current cell.
+    #[inline(always)]
+    fn brick(&self) -> Vec3A {
+        (self.cell * (1.0 / BRICK_EDGE as f32)).floor()
+    }
+
+    /// Looks up the current cell's brick if it changed; skips it (and every following empty
+    /// brick) if it is unallocated. False if the walk ended.
+    #[inline(always)]
+    fn enter_brick(&mut self, lookup: &impl BrickLookup) -> bool {
+        let b = self.brick();
+        if b.cmpne(self.cached_brick).any() {
+            self.cached_brick = b;
+            self.cached_index = lookup.brick_index_f(b).unwrap_or(u32::MAX);
+            if self.cached_index == u32::MAX {
+                return self.skip_empty_bricks(b, lookup);
+            }
+        }
+        true
+    }
+
+    /// The next voxel in an allocated brick (see [`BrickLookup`]), with that brick's index;
+    /// the voxels of unallocated bricks are jumped over.
     #[inline]
     pub fn next_occupied_brick(&mut self, lookup: &impl BrickLookup) -> Option<DdaVoxel> {
-        if self.done {
-            return None;
-        }
-        let b = self.cell / BRICK_EDGE as i32;
-        if b != self.cached_brick {
-            self.cached_brick = b;
-            self.cached_index = lookup.brick_index(b.as_uvec3()).unwrap_or(u32::MAX);
-        }
-        if self.cached_index == u32::MAX && !self.skip_empty_bricks(b, lookup) {
+        if self.done || !self.enter_brick(lookup) {
             return None;
         }
         Some(self.emit_and_advance(self.cached_index))
+    }
+
+    /// The next **occupied** voxel: as [`Dda::next_occupied_brick`] followed by the voxel test
+    /// of `occupancy`, with the same voxels, `t`s and entry normals, but the empty voxels of
+    /// an allocated brick are stepped over without being returned, and its empty 2³ blocks
+    /// are crossed in one jump (as empty bricks are: exit planes by the one expression, then
+    /// the cell at the exit `t`).
+    #[inline]
+    pub fn next_occupied_voxel(&mut self, occupancy: &impl VoxelOccupancy) -> Option<DdaVoxel> {
+        loop {
+            if self.done || !self.enter_brick(occupancy) {
+                return None;
+            }
+            let masks = occupancy.masks(self.cached_index);
+            // Linear index x + 8y + 64z of the cell in its brick: one conversion.
+            let local = self.cell - self.cached_brick * BRICK_EDGE as f32;
+            let linear = local.dot(Vec3A::new(1.0, 8.0, 64.0)) as u32;
+            if masks.has_voxel_linear(linear) {
+                return Some(self.emit_and_advance(self.cached_index));
+            }
+            if masks.has_block_linear(linear) {
+                let (t_next, axes) = self.next_crossing(self.cell);
+                self.advance(t_next, axes);
+            } else {
+                self.skip_block();
+            }
+        }
+    }
+
+    /// Leaves the 2³ block (blocks are aligned to even coordinates, so never straddle a brick)
+    /// holding the current cell: the cell becomes the one the ray enters at the block's exit
+    /// `t`, as stepping voxel by voxel would reach it; ends the walk if that is past its end.
+    #[inline]
+    fn skip_block(&mut self) {
+        let lo = (self.cell * 0.5).floor() * 2.0;
+        let hi = (lo + 1.0).min(self.dims - 1.0);
+        let exit_cell = Vec3A::select(self.up, hi, lo);
+        let (t_exit, axes) = self.next_crossing(exit_cell);
+        let next = exit_cell + Vec3A::select(axes, self.step, Vec3A::ZERO);
+        if t_exit >= self.t_end || self.outside(next) {
+            self.done = true;
+            return;
+        }
+        // On the other axes the ray stays in the block: past its middle plane `lo + 1` iff it
+        // crosses that plane at or before `t_exit` (the locate rule of the voxel stepping).
+        let mid =
+            Vec3A::select(self.parallel, Vec3A::INFINITY, (lo + 1.0 - self.origin) * self.inv);
+        let t = Vec3A::splat(t_exit);
+        // Near half: `lo` going up, `lo + 1` going down; the far half the other one.
+        let near = Vec3A::select(self.up, lo, lo + 1.0);
+        let inside = near + Vec3A::select(mid.cmple(t), self.step, Vec3A::ZERO);
+        let stay = Vec3A::select(self.parallel, self.cell, inside);
+        self.cell = Vec3A::select(axes, next, stay);
+        self.entry_axes = axes.bitmask() | mid.cmpeq(t).bitmask();
+        self.t = t_exit;
+    }
+
+    /// Moves to the cell of `[lo, hi]` that the ray is in at `t`, reached by crossing the
+    /// planes of `axes` at `t`: located by the plane expression of the voxel stepping, its
+    /// entry axes every axis whose plane is crossed at exactly `t`, as stepping voxel by voxel
+    /// would step them.
+    fn enter_at(&mut self, t: f32, axes: u32, lo: Vec3A, hi: Vec3A) {
+        let cell = self.locate(t, lo.as_ivec3(), hi.as_ivec3());
+        let mut entered = axes;
+        for a in 0..3 {
+            let s = self.step_i[a];
+            let enter = if s > 0 { cell[a] } else { cell[a] + 1 };
+            if s != 0 && self.plane(a, enter) == t {
+                entered |= 1 << a;
+            }
+        }
+        self.cell = cell.as_vec3a();
+        self.entry_axes = entered;
+        self.t = t;
     }
 
     /// From the current voxel, in the unallocated brick `b`, steps brick by brick to the first
     /// allocated one and enters it: its voxel where the ray enters it, located by the plane
     /// expression of the voxel stepping, so the result is what stepping voxel by voxel would
     /// reach. Returns false (and ends the walk) if the ray leaves the grid or ends first.
-    fn skip_empty_bricks(&mut self, mut b: IVec3, lookup: &impl BrickLookup) -> bool {
-        let edge = BRICK_EDGE as i32;
-        let brick_dims = (self.dims + edge - 1) / edge;
+    fn skip_empty_bricks(&mut self, mut b: Vec3A, lookup: &impl BrickLookup) -> bool {
+        let edge = BRICK_EDGE as f32;
         loop {
             let lo = b * edge;
-            let hi = (lo + edge).min(self.dims) - 1;
-            let exit_cell = IVec3::select(self.step.cmpgt(IVec3::ZERO), hi, lo);
+            let hi = (lo + edge).min(self.dims) - 1.0;
+            let exit_cell = Vec3A::select(self.up, hi, lo);
             let (t_exit, axes) = self.next_crossing(exit_cell);
-            b += self.step * axes_mask(axes);
-            if t_exit >= self.t_end || b.cmplt(IVec3::ZERO).any() || b.cmpge(brick_dims).any() {
+            b += Vec3A::select(axes, self.step, Vec3A::ZERO);
+            if t_exit >= self.t_end || (b.cmplt(Vec3A::ZERO) | b.cmpge(self.brick_dims)).any() {
                 self.done = true;
                 return false;
             }
-            let Some(index) = lookup.brick_index(b.as_uvec3()) else { continue };
+            let Some(index) = lookup.brick_index_f(b) else { continue };
             let lo = b * edge;
-            let hi = (lo + edge).min(self.dims) - 1;
-            self.cell = self.locate(t_exit, lo, hi);
-            // The axes whose planes the ray crosses at t_exit, as voxel stepping would step them.
-            let mut entered = 0;
-            for a in 0..3 {
-                let s = self.step[a];
-                let enter = if s > 0 { self.cell[a] } else { self.cell[a] + 1 };
-                if s != 0 && self.plane(a, enter) == t_exit {
-                    entered |= 1 << a;
-                }
-            }
-            self.entry_normal = self.normal_for(entered | axes);
-            self.t = t_exit;
+            let hi = (lo + edge).min(self.dims) - 1.0;
+            self.enter_at(t_exit, axes.bitmask(), lo, hi);
             self.cached_brick = b;
             self.cached_index = index;
             return true;
         }
     }
-}
-
-#[inline(always)]
-fn axes_mask(axes: u32) -> IVec3 {
-    IVec3::new((axes & 1) as i32, (axes >> 1 & 1) as i32, (axes >> 2 & 1) as i32)
 }
 
 impl Iterator for Dda {

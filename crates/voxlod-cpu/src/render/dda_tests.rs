@@ -1,12 +1,12 @@
 //! DDA tests: against a brute-force slab test over every voxel of small grids (visited set,
-//! order and `t`s), brick skipping against plain stepping, and the exact cases of the tie rules.
+//! order and `t`s), brick skipping and occupied-voxel walks against plain stepping, and the exact cases of the tie rules.
 
 use glam::{DVec3, IVec3, UVec3, Vec3};
 use proptest::prelude::*;
 use voxlod_format::{BrickMap, GridSpec};
 
 use super::*;
-use crate::render::bricks::DenseBricks;
+use crate::render::bricks::{DenseBricks, Occupancy, brick_masks};
 
 /// Per voxel, the ray's parameter interval inside it, in f64, with the half-open rule for
 /// axes the ray is parallel to (components below `f32::MIN_POSITIVE`, as the DDA treats them).
@@ -152,6 +152,66 @@ proptest! {
             prop_assert_eq!(&got, &expected);
         }
     }
+
+    #[test]
+    fn occupied_voxel_walk_equals_stepping_filtered_by_voxel(
+        dims in (1u32..40, 1u32..40, 1u32..40),
+        voxels in proptest::collection::vec((0u32..40, 0u32..40, 0u32..40), 0..300),
+        lump in 0u32..5,
+        o in (-5.0f32..45.0, -5.0f32..45.0, -5.0f32..45.0),
+        d in (component(), component(), component()),
+        t_max in prop_oneof![Just(f32::INFINITY), 0.0f32..60.0],
+    ) {
+        // Voxels snapped to multiples of `lump` + 1 cluster into fewer blocks and bricks, so
+        // walks meet full, partly empty and empty blocks of allocated bricks.
+        let dims = UVec3::new(dims.0, dims.1, dims.2);
+        let occupied: std::collections::HashSet<UVec3> = voxels
+            .iter()
+            .map(|&(x, y, z)| (UVec3::new(x, y, z) / (lump + 1) * (lump + 1)) % dims)
+            .collect();
+        let map = BrickMap::from_voxels(dims, occupied.iter().map(|&c| (c, ()))).unwrap();
+        let grid = unit_grid(dims);
+        let (o, d) = (Vec3::new(o.0, o.1, o.2), Vec3::new(d.0, d.1, d.2));
+        let expected: Vec<DdaVoxel> = Dda::new(&grid, o, d, 0.0, t_max)
+            .filter(|v| occupied.contains(&v.voxel))
+            .collect();
+        let masks = brick_masks(&map);
+        let table = DenseBricks::new(&map).unwrap();
+        let occupancy = Occupancy { bricks: &table, masks: &masks };
+        let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
+        let mut got = Vec::new();
+        while let Some(v) = dda.next_occupied_voxel(&occupancy) {
+            prop_assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap());
+            got.push(DdaVoxel { brick: u32::MAX, ..v });
+        }
+        prop_assert_eq!(&got, &expected);
+    }
+}
+
+#[test]
+fn brick_masks_mark_voxels_and_their_blocks() {
+    let voxels =
+        [UVec3::new(0, 0, 0), UVec3::new(7, 7, 7), UVec3::new(3, 4, 5), UVec3::new(9, 1, 2)];
+    let map = BrickMap::from_voxels(UVec3::new(16, 8, 8), voxels.iter().map(|&c| (c, ()))).unwrap();
+    let masks = brick_masks(&map);
+    assert_eq!(masks.len(), 2);
+    for x in 0..16 {
+        for y in 0..8 {
+            for z in 0..8 {
+                let c = UVec3::new(x, y, z);
+                let block = |v: UVec3| v / 2 == c / 2;
+                if let Some(b) = map.brick_index(c / 8) {
+                    let m = &masks[b];
+                    assert_eq!(m.has_voxel(c % 8), voxels.contains(&c), "{c}");
+                    assert_eq!(m.has_block(c % 8), voxels.iter().any(|&v| block(v)), "{c}");
+                    let l = c % 8;
+                    let linear = l.x + 8 * l.y + 64 * l.z;
+                    assert_eq!(m.has_voxel_linear(linear), m.has_voxel(l), "{c}");
+                    assert_eq!(m.has_block_linear(linear), m.has_block(l), "{c}");
+                }
+            }
+        }
+    }
 }
 
 #[test]
@@ -218,4 +278,27 @@ fn degenerate_rays_visit_nothing() {
     }
     assert!(Dda::new(&g, Vec3::ONE, Vec3::X, 3.0, 1.0).next().is_none());
     assert!(Dda::new(&g, Vec3::ONE, Vec3::X, f32::NAN, 1.0).next().is_none());
+}
+
+#[test]
+fn a_skipped_block_is_left_through_an_edge_as_stepping_leaves_it() {
+    // From (1.5, 0, 0.5) along (1, 2, 0) the ray leaves the empty block [0, 2)² through x = 2
+    // at t = 0.5, exactly where it crosses the block's middle plane y = 1: stepping moves both
+    // axes at once into (2, 1, 0), entering through −y (the larger direction component).
+    let dims = UVec3::new(8, 8, 2);
+    let voxels = [UVec3::new(2, 1, 0), UVec3::new(5, 7, 0)];
+    let map = BrickMap::from_voxels(dims, voxels.iter().map(|&c| (c, ()))).unwrap();
+    let (grid, o, d) = (unit_grid(dims), Vec3::new(1.5, 0.0, 0.5), Vec3::new(1.0, 2.0, 0.0));
+    let expected: Vec<DdaVoxel> =
+        Dda::new(&grid, o, d, 0.0, f32::INFINITY).filter(|v| voxels.contains(&v.voxel)).collect();
+    assert_eq!(expected[0].voxel, UVec3::new(2, 1, 0));
+    assert_eq!(expected[0].entry_normal, IVec3::new(0, -1, 0));
+    let masks = brick_masks(&map);
+    let table = DenseBricks::new(&map).unwrap();
+    let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
+    let mut got = Vec::new();
+    while let Some(v) = dda.next_occupied_voxel(&Occupancy { bricks: &table, masks: &masks }) {
+        got.push(DdaVoxel { brick: u32::MAX, ..v });
+    }
+    assert_eq!(got, expected);
 }

@@ -9,25 +9,25 @@
 use glam::UVec3;
 use voxlod_format::{BRICK_EDGE, BrickMap, Result, morton};
 
-use crate::render::bricks::DenseBricks;
+use crate::render::bricks::{BrickLookup, BrickMasks, DenseBricks, Occupancy};
 
-/// One brick's occupancy in linear order.
+/// Where one brick's records start: per word of its [`BrickMasks::voxels`], the set bits in
+/// the words before it, and the index in `records` of the brick's first voxel.
 #[derive(Clone, Copy, Debug, Default)]
-struct LinearBrick {
-    /// Bit `x + 8y` of word `z`: voxel `(x, y, z)` of the brick has a record.
-    mask: [u64; 8],
-    /// Set bits in the words before each word.
+struct Ranks {
     before: [u16; 8],
-    /// Index in `records` of the brick's first voxel.
     first: u32,
 }
 
 /// The voxels with a record: a brick map (for brick look-ups and iteration), its dense brick
-/// table when one fits, and the linear-order occupancy with each voxel's record index.
+/// table when one fits, each brick's linear-order occupancy ([`BrickMasks`], what the DDA's
+/// [`next_occupied_voxel`](crate::render::dda::Dda::next_occupied_voxel) reads) and each
+/// voxel's record index.
 pub(super) struct VoxelLookup {
     pub map: BrickMap<()>,
     pub dense: Option<DenseBricks>,
-    bricks: Vec<LinearBrick>,
+    masks: Vec<BrickMasks>,
+    ranks: Vec<Ranks>,
     records: Vec<u32>,
 }
 
@@ -42,44 +42,53 @@ impl VoxelLookup {
     pub fn new(dims: UVec3, found: &[(u64, u32)]) -> Result<Self> {
         let map = BrickMap::from_morton_sorted(dims, found.iter().map(|&(c, _)| (c, ())))?;
         let dense = DenseBricks::new(&map);
-        let mut bricks = Vec::with_capacity(map.bricks().len());
+        let mut masks = Vec::with_capacity(map.bricks().len());
+        let mut ranks = Vec::with_capacity(map.bricks().len());
         let mut records = vec![0u32; found.len()];
         let mut rest = found;
+        let mut local = Vec::new();
         for h in map.bricks() {
             let (mine, next) = rest.split_at(h.count() as usize);
             rest = next;
-            let mut b = LinearBrick { first: h.first, ..Default::default() };
-            let mut local: Vec<(u32, u32)> = mine
-                .iter()
-                .map(|&(code, record)| (linear(morton::decode(code) % BRICK_EDGE), record))
-                .collect();
-            local.sort_unstable();
-            for (rank, &(l, record)) in local.iter().enumerate() {
-                b.mask[(l >> 6) as usize] |= 1 << (l & 63);
+            local.clear();
+            local.extend(
+                mine.iter().map(|&(code, record)| (morton::decode(code) % BRICK_EDGE, record)),
+            );
+            local.sort_unstable_by_key(|&(l, _)| linear(l));
+            for (rank, &(_, record)) in local.iter().enumerate() {
                 records[h.first as usize + rank] = record;
             }
+            let m = BrickMasks::from_local(local.iter().map(|&(l, _)| l));
+            let mut r = Ranks { first: h.first, ..Default::default() };
             let mut count = 0u16;
             for w in 0..8 {
-                b.before[w] = count;
-                count += b.mask[w].count_ones() as u16;
+                r.before[w] = count;
+                count += m.voxels[w].count_ones() as u16;
             }
-            bricks.push(b);
+            masks.push(m);
+            ranks.push(r);
         }
-        Ok(Self { map, dense, bricks, records })
+        Ok(Self { map, dense, masks, ranks, records })
+    }
+
+    /// The occupancy the DDA walks with: `bricks` (the dense table or the map) and the masks.
+    #[inline(always)]
+    pub fn occupancy<'a, L: BrickLookup>(&'a self, bricks: &'a L) -> Occupancy<'a, L> {
+        Occupancy { bricks, masks: &self.masks }
     }
 
     /// The record index of `voxel`, which lies in brick number `brick` of the map (as
     /// [`crate::render::dda::DdaVoxel::brick`] reports it), if the voxel has one.
     #[inline(always)]
     pub fn record(&self, brick: u32, voxel: UVec3) -> Option<usize> {
-        let b = self.bricks.get(brick as usize)?;
+        let (m, r) = (self.masks.get(brick as usize)?, &self.ranks[brick as usize]);
         let l = voxel % BRICK_EDGE;
-        let word = b.mask[l.z as usize];
+        let word = m.voxels[l.z as usize];
         let bit = l.x | l.y << 3;
         if word >> bit & 1 == 0 {
             return None;
         }
-        let rank = b.first + b.before[l.z as usize] as u32 + (word & ((1 << bit) - 1)).count_ones();
+        let rank = r.first + r.before[l.z as usize] as u32 + (word & ((1 << bit) - 1)).count_ones();
         Some(self.records[rank as usize] as usize)
     }
 
@@ -87,7 +96,8 @@ impl VoxelLookup {
     pub fn memory_bytes(&self) -> usize {
         self.map.memory_bytes()
             + self.dense.as_ref().map_or(0, DenseBricks::memory_bytes)
-            + self.bricks.capacity() * size_of::<LinearBrick>()
+            + self.masks.capacity() * size_of::<BrickMasks>()
+            + self.ranks.capacity() * size_of::<Ranks>()
             + self.records.capacity() * size_of::<u32>()
     }
 }

@@ -30,13 +30,14 @@
 //! - **Shading.** The representation's [`Appearance::radiance`] for `v`, the light seen from
 //!   the voxel centre, the visibility and the ambient term; every representation shades with
 //!   the one [`crate::shading::shade`].
-//! - **Empty space.** Walks skip empty 8³ bricks (the DDA's brick stepping). Beyond that, only
-//!   conservative bounds that shorten a walk's `t_max`: a pixel whose 8×8 tile no allocated
-//!   brick projects onto is background without a walk, a camera ray ends past the farthest
-//!   brick projecting onto its tile, and a shadow ray toward a directional light ends past the
-//!   highest voxel projecting onto its cell of a light-space height map. Shortening `t_max`
-//!   never changes the `t` of a voxel visited before it, so the image equals that of unbounded
-//!   walks (tested).
+//! - **Empty space.** Walks skip empty 8³ bricks and, inside allocated bricks, empty 2³
+//!   blocks (the DDA's [`Dda::next_occupied_voxel`]; same voxels and `t`s as stepping voxel by
+//!   voxel). Beyond that, only conservative bounds that shorten a walk's `t_max`: a pixel
+//!   whose 8×8 tile no allocated brick projects onto is background without a walk, a camera
+//!   ray ends past the farthest brick projecting onto its tile, and a shadow ray toward a
+//!   directional light ends past the highest voxel projecting onto its cell of a light-space
+//!   height map. Shortening `t_max` never changes the `t` of a voxel visited before it, so
+//!   the image equals that of unbounded walks (tested).
 //!
 //! Threads racing on a voxel's cache slot compute bit-identical values, so images are
 //! deterministic and equal to [`render_uncached`], which evaluates everything per ray.
@@ -336,8 +337,8 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
     }
 }
 
-/// A DDA walk with brick skipping that yields the voxels with a record and their record
-/// index.
+/// A DDA walk that skips empty bricks and empty 2³ blocks and yields the voxels with a
+/// record and their record index.
 struct Walk<'a> {
     dda: Dda,
     lookup: &'a VoxelLookup,
@@ -353,7 +354,8 @@ impl<'a> Walk<'a> {
     #[inline]
     fn next(&mut self, lookup: &impl BrickLookup) -> Option<(DdaVoxel, usize)> {
         loop {
-            let v = self.dda.next_occupied_brick(lookup)?;
+            let v = self.dda.next_occupied_voxel(&self.lookup.occupancy(lookup))?;
+            // Every voxel the occupancy marks has a record.
             if let Some(record) = self.lookup.record(v.brick, v.voxel) {
                 return Some((v, record));
             }
