@@ -3,10 +3,11 @@
 //! nodes of each step):
 //! 1. **Input check**: coordinates inside the grid, strictly increasing Morton codes (no
 //!    duplicate), every payload accepted by [`Payload::check`].
-//! 2. **Occupied levels, bottom-up**: the occupied nodes of level `l+1` are the distinct codes
-//!    `c >> 3` of level `l`; each one's payload is [`Payload::prefilter`] of its (up to) eight
-//!    occupied children, the others counting as empty, and it records its children's mask and
-//!    the index of its first occupied child. Sorted input stays sorted at every level.
+//! 2. **Occupied levels, bottom-up**: the [`Topology`] (the occupied nodes of level `l+1` are the
+//!    distinct codes `c >> 3` of level `l`, each with its children's mask and the index of its
+//!    first occupied child; sorted input stays sorted at every level), then per level each
+//!    occupied node's payload, [`Payload::prefilter`] of its (up to) eight occupied children,
+//!    the others counting as empty.
 //! 3. **Sparse levels, top-down**, each from the finished level above it (`octree` module docs
 //!    for the node set):
 //!    - *tiles*: a node `q` of level `l+1` gets a 2×2×2 tile of children iff it is the parent of
@@ -19,10 +20,9 @@
 //!    - *payloads*: tile `t`'s occupied children are a run of the occupied list, found through the
 //!      parent's first-child index and mask (no search);
 //!    - *links*: per tile, the +a neighbour tile is the child tile of the parent's +a neighbour
-//!      (through the parent level's links, or a Morton increment on the dense level); child `k`'s
-//!      +a neighbour is `k | bit` in its own tile when `k`'s a-bit is 0, else child `k & !bit` of
-//!      the neighbour tile. It finds every existing neighbour because a tile exists exactly when
-//!      its parent is a node of the closure.
+//!      (through the parent level's links, or a Morton increment on the dense level); the nodes'
+//!      neighbours follow from the tile links (`octree` module docs). It finds every existing
+//!      neighbour because a tile exists exactly when its parent is a node of the closure.
 //!
 //! The first build (sorted closure parents, per-node link search of the parents) is kept in
 //! `reference` (test builds), and a test asserts both build identical octrees.
@@ -33,24 +33,28 @@ use glam::UVec3;
 use rayon::prelude::*;
 use voxlod_format::{BrickMap, GridSpec, morton};
 
-use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
+use crate::octree::{
+    BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree, sparse_neighbour,
+};
 use crate::payload::Payload;
+use crate::topology::{Topology, TopologyLevel};
 use crate::{Error, Result};
 
 #[cfg(test)]
 pub(crate) mod reference;
 
 /// Items per rayon task below which splitting does not pay.
-const MIN_LEN: usize = 2048;
+pub(crate) const MIN_LEN: usize = 2048;
 
-/// Occupied nodes of one level: sorted Morton codes and their payloads.
-struct Occupied<P> {
-    codes: Vec<u64>,
-    payload: Vec<P>,
+/// Occupied nodes of one level: a [`TopologyLevel`]'s arrays and the nodes' payloads.
+struct Occupied<'a, P> {
+    /// Sorted Morton codes.
+    codes: &'a [u64],
     /// Per node (above level 0): bit `k` set if child `k` is occupied.
-    mask: Vec<u8>,
+    mask: &'a [u8],
     /// Per node (above level 0): index of its first occupied child in the level below.
-    first: Vec<u32>,
+    first: &'a [u32],
+    payload: &'a [P],
 }
 
 impl<P: Payload> Octree<P> {
@@ -103,6 +107,7 @@ impl<P: Payload> Octree<P> {
 
     /// Builds an octree from `(Morton code, payload)` pairs in strictly increasing code order.
     /// Out-of-order or repeated codes, voxels outside the grid and rejected payloads are errors.
+    /// The same as [`Topology::from_morton_sorted`] followed by [`Octree::from_topology`].
     pub fn from_morton_sorted(
         grid: GridSpec,
         voxels: Vec<(u64, P)>,
@@ -111,16 +116,46 @@ impl<P: Payload> Octree<P> {
         grid.validate()?;
         let (depth, first_dense) = plan(grid.dims, options)?;
         check_input(grid.dims, &voxels)?;
-        if voxels.len() as u64 >= NONE as u64 {
-            return Err(Error::TooManyNodes { level: 0, nodes: voxels.len() as u64 });
+        let (codes, payload): (Vec<u64>, Vec<P>) = voxels.into_iter().unzip();
+        let topology = Topology::from_checked(grid, depth, first_dense, codes)?;
+        Self::extend(topology, payload)
+    }
+
+    /// Extends a [`Topology`] into an octree: `payload[i]` is the payload of voxel `i` of the
+    /// topology (its level-0 node, in Morton order). Pre-filters the payloads up the occupied
+    /// levels, adds the closure nodes and tiles, the dense top levels (down to the topology's
+    /// [`Topology::first_dense`]) and the neighbour links. A payload count other than the
+    /// topology's voxel count, or a payload [`Payload::check`] rejects, is an error (naming the
+    /// voxel).
+    pub fn from_topology(topology: Topology, payload: Vec<P>) -> Result<Self> {
+        let voxels = topology.voxel_count();
+        if payload.len() as u64 != voxels {
+            return Err(Error::PayloadCount { voxels, payloads: payload.len() as u64 });
         }
-        let voxel_count = voxels.len() as u64;
-        let (codes, payload) = voxels.into_iter().unzip();
-        let mut occupied = vec![Occupied { codes, payload, mask: Vec::new(), first: Vec::new() }];
-        for l in 1..=depth as usize {
-            let next = coarsen(&occupied[l - 1]);
-            occupied.push(next);
+        let bad = payload.par_iter().with_min_len(MIN_LEN).position_first(|p| p.check().is_some());
+        if let Some(i) = bad {
+            let coord = morton::decode(topology.levels[0].codes[i]);
+            let reason = payload[i].check().unwrap_or("rejected");
+            return Err(Error::InvalidPayload { coord, reason });
         }
+        Self::extend(topology, payload)
+    }
+
+    /// The build after the input checks (module docs, steps 2–3).
+    fn extend(topology: Topology, payload: Vec<P>) -> Result<Self> {
+        let Topology { grid, depth, first_dense, levels: topo } = topology;
+        let voxel_count = topo[0].codes.len() as u64;
+        let mut payloads = Vec::with_capacity(topo.len());
+        payloads.push(payload);
+        for l in 1..topo.len() {
+            let next = prefilter_level(&topo[l], &payloads[l - 1]);
+            payloads.push(next);
+        }
+        let occupied: Vec<Occupied<'_, P>> = topo
+            .iter()
+            .zip(&payloads)
+            .map(|(t, p)| Occupied { codes: &t.codes, mask: &t.mask, first: &t.first, payload: p })
+            .collect();
         let fd = first_dense as usize;
         let mut levels: Vec<Level<P>> = (0..=depth as usize)
             .into_par_iter()
@@ -129,14 +164,13 @@ impl<P: Payload> Octree<P> {
                 if l >= fd {
                     dense_level(res_log2, &occupied[l])
                 } else {
-                    let empty = Vec::new();
                     Level {
                         res_log2,
                         dense: false,
-                        payload: empty,
+                        payload: Vec::new(),
                         child: Vec::new(),
                         mask: Vec::new(),
-                        links: Vec::new(),
+                        tile_links: Vec::new(),
                     }
                 }
             })
@@ -168,7 +202,7 @@ impl<P: Payload> Octree<P> {
                 .collect();
             let (payload, occ_here) = fill_tiles(&tiles, &occ_above, occ_parent, occ, l > 0);
             level.payload = payload;
-            level.links = links(&tiles, parent);
+            level.tile_links = links(&tiles, parent);
             occ_above = occ_here;
         }
         let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
@@ -199,23 +233,28 @@ pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
     Ok((depth, depth - options.dense_log2.min(depth)))
 }
 
+/// What is wrong with voxel `code` after `prev` (outside the grid, repeated, out of order), if
+/// anything.
+pub(crate) fn code_problem(dims: UVec3, code: u64, prev: Option<u64>) -> Option<Error> {
+    let coord = morton::decode(code);
+    if code >> 63 != 0 || !coord.cmplt(dims).all() {
+        return Some(Error::OutOfBounds { coord, dims });
+    }
+    let prev = prev?;
+    if prev == code {
+        return Some(Error::DuplicateVoxel { coord });
+    }
+    (prev > code).then_some(Error::OutOfOrder { coord, code })
+}
+
 /// Checks the input, so the error names the first bad voxel.
 fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
     let problem = |i: usize| -> Option<Error> {
         let (code, ref p) = voxels[i];
+        if let Some(e) = code_problem(dims, code, i.checked_sub(1).map(|j| voxels[j].0)) {
+            return Some(e);
+        }
         let coord = morton::decode(code);
-        if code >> 63 != 0 || !coord.cmplt(dims).all() {
-            return Some(Error::OutOfBounds { coord, dims });
-        }
-        if i > 0 {
-            let prev = voxels[i - 1].0;
-            if prev == code {
-                return Some(Error::DuplicateVoxel { coord });
-            }
-            if prev > code {
-                return Some(Error::OutOfOrder { coord, code });
-            }
-        }
         p.check().map(|reason| Error::InvalidPayload { coord, reason })
     };
     let first_bad = (0..voxels.len())
@@ -228,30 +267,23 @@ fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
     }
 }
 
-/// The occupied nodes one level up: distinct parents, each the prefilter of its children, with
-/// their children's mask and first index.
-fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
-    let c = &level.codes;
-    let starts: Vec<u32> =
-        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).map(|i| i as u32).collect();
-    let codes = starts.par_iter().with_min_len(MIN_LEN).map(|&s| c[s as usize] >> 3).collect();
-    // Exact-length outputs (an indexed unzip), not vectors grown chunk by chunk.
-    let (mut payload, mut mask) = (Vec::new(), Vec::new());
-    (0..starts.len())
+/// Payloads of an occupied level from the level below's: each node's is [`Payload::prefilter`]
+/// of its occupied children (found by first index and mask), the others counting as empty.
+fn prefilter_level<P: Payload>(level: &TopologyLevel, below: &[P]) -> Vec<P> {
+    (0..level.first.len())
         .into_par_iter()
         .with_min_len(MIN_LEN)
         .map(|g| {
-            let end = starts.get(g + 1).map_or(c.len(), |&e| e as usize);
             let mut children = [P::empty(); 8];
-            let mut mask = 0u8;
-            for i in starts[g] as usize..end {
-                children[(c[i] & 7) as usize] = level.payload[i];
-                mask |= 1 << (c[i] & 7);
+            let (mut m, mut j) = (level.mask[g], level.first[g] as usize);
+            while m != 0 {
+                children[m.trailing_zeros() as usize] = below[j];
+                j += 1;
+                m &= m - 1;
             }
-            (P::prefilter(&children), mask)
+            P::prefilter(&children)
         })
-        .unzip_into_vecs(&mut payload, &mut mask);
-    Occupied { codes, payload, mask, first: starts }
+        .collect()
 }
 
 /// `SUBSETS[m]`: bit `d` set for every `d ⊆ m` (3-bit sets).
@@ -316,17 +348,24 @@ pub(crate) fn morton_inc(code: u64, a: usize, res_log2: u32) -> Option<u64> {
 
 /// A dense level: every payload, indexed by Morton code (child pointers and masks of the
 /// finest dense level are set when the level below is built).
-fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<P>) -> Level<P> {
+fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<'_, P>) -> Level<P> {
     let n = 1usize << (3 * res_log2);
     let mut payload = vec![P::empty(); n];
-    for (&c, p) in occupied.codes.iter().zip(&occupied.payload) {
+    for (&c, p) in occupied.codes.iter().zip(occupied.payload) {
         payload[c as usize] = *p;
     }
-    Level { res_log2, dense: true, payload, child: Vec::new(), mask: Vec::new(), links: Vec::new() }
+    Level {
+        res_log2,
+        dense: true,
+        payload,
+        child: Vec::new(),
+        mask: Vec::new(),
+        tile_links: Vec::new(),
+    }
 }
 
 /// Occupied index per node of a dense level.
-fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u32> {
     let mut occ = vec![NONE; level.payload.len()];
     for (g, &c) in occupied.codes.iter().enumerate() {
         occ[c as usize] = g as u32;
@@ -336,9 +375,9 @@ fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
 
 /// Tile parents (node indices, ascending) under a dense level: each occupied node `q` marks
 /// `q − d` for `d ∈ SHIFTS[mask]`.
-fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u32> {
     let mut marked = vec![false; level.payload.len()];
-    for (&q, &m) in occupied.codes.iter().zip(&occupied.mask) {
+    for (&q, &m) in occupied.codes.iter().zip(occupied.mask) {
         let s = SHIFTS[m as usize];
         for d in 0..8usize {
             if s >> d & 1 == 0 {
@@ -359,16 +398,16 @@ fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
 fn sparse_tile_parents<P: Payload>(
     level: &Level<P>,
     occ: &[u32],
-    occupied: &Occupied<P>,
+    occupied: &Occupied<'_, P>,
 ) -> Vec<u32> {
-    let links = &level.links;
+    let links = &level.tile_links;
     let hit = |i: u32, d: u32| {
         i != NONE && {
             let g = occ[i as usize];
             g != NONE && SHIFTS[occupied.mask[g as usize] as usize] >> d & 1 == 1
         }
     };
-    let hop = |i: u32, a: usize| if i == NONE { NONE } else { links[i as usize][a] };
+    let hop = |i: u32, a: usize| if i == NONE { NONE } else { sparse_neighbour(links, i, a) };
     (0..occ.len() as u32)
         .into_par_iter()
         .with_min_len(MIN_LEN)
@@ -376,7 +415,7 @@ fn sparse_tile_parents<P: Payload>(
             if hit(n, 0) {
                 return true;
             }
-            let [x, y, z] = links[n as usize];
+            let [x, y, z] = [0, 1, 2].map(|a| sparse_neighbour(links, n, a));
             let (xy, xz, yz) = (hop(x, 1), hop(x, 2), hop(y, 2));
             hit(x, 1)
                 || hit(y, 2)
@@ -395,8 +434,8 @@ fn sparse_tile_parents<P: Payload>(
 fn fill_tiles<P: Payload>(
     tiles: &[u32],
     occ_above: &[u32],
-    above: &Occupied<P>,
-    here: &Occupied<P>,
+    above: &Occupied<'_, P>,
+    here: &Occupied<'_, P>,
     with_occupancy: bool,
 ) -> (Vec<P>, Vec<u32>) {
     // Node 8t + k is occupied iff bit k of its parent's mask is; its index in `here` is the
@@ -430,39 +469,21 @@ fn fill_tiles<P: Payload>(
     }
 }
 
-/// Forward links of the sparse level under `tiles` (node indices of `parent`, whose child
-/// pointers are set and, if sparse, links built).
+/// Tile links of the sparse level under `tiles` (node indices of `parent`, whose child pointers
+/// are set and, if sparse, tile links built): tile `t`'s +a neighbour tile is the child tile of
+/// its parent's +a neighbour.
 fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
     let neighbour = |p: u32, a: usize| -> u32 {
         let q = if parent.dense {
             morton_inc(p as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
         } else {
-            parent.links[p as usize][a]
+            sparse_neighbour(&parent.tile_links, p, a)
         };
         if q == NONE { NONE } else { parent.child[q as usize] }
     };
-    let tile_links: Vec<[u32; 3]> = tiles
+    tiles
         .par_iter()
         .with_min_len(MIN_LEN / 8)
         .map(|&p| std::array::from_fn(|a| neighbour(p, a)))
-        .collect();
-    (0..8 * tiles.len())
-        .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .map(|i| {
-            let (t, k) = (i / 8, (i % 8) as u32);
-            let (base, tl) = (8 * t as u32, &tile_links[t]);
-            let link = |a: usize| {
-                let bit = 1 << a;
-                if k & bit == 0 {
-                    base + (k | bit)
-                } else if tl[a] == NONE {
-                    NONE
-                } else {
-                    tl[a] + (k & !bit)
-                }
-            };
-            [link(0), link(1), link(2)]
-        })
         .collect()
 }
