@@ -182,24 +182,24 @@ impl<P: Payload> Octree<P> {
             let (lower, upper) = levels.split_at_mut(l + 1);
             let (level, parent) = (&mut lower[l], &mut upper[0]);
             let (occ, occ_parent) = (&occupied[l], &occupied[l + 1]);
-            let tiles = if parent.dense {
-                dense_tile_parents(parent, occ_parent)
-            } else {
-                sparse_tile_parents(parent, &occ_above, occ_parent)
-            };
-            let nodes = 8 * tiles.len() as u64;
-            if nodes >= NONE as u64 {
-                return Err(Error::TooManyNodes { level: l as u32, nodes });
-            }
-            parent.child = vec![NONE; parent.payload.len()];
-            for (rank, &p) in tiles.iter().enumerate() {
-                parent.child[p as usize] = 8 * rank as u32;
-            }
+            // Masks first: on a sparse parent level the tiles are read from them.
             parent.mask = occ_above
                 .par_iter()
                 .with_min_len(MIN_LEN)
                 .map(|&g| if g == NONE { 0 } else { occ_parent.mask[g as usize] })
                 .collect();
+            let marked = if parent.dense {
+                dense_tile_marks(parent, occ_parent)
+            } else {
+                sparse_tile_marks(parent)
+            };
+            let (tiles, child) = allocate_tiles(&marked);
+            drop(marked);
+            let nodes = 8 * tiles.len() as u64;
+            if nodes >= NONE as u64 {
+                return Err(Error::TooManyNodes { level: l as u32, nodes });
+            }
+            parent.child = child;
             let (payload, occ_here) = fill_tiles(&tiles, &occ_above, occ_parent, occ, l > 0);
             level.payload = payload;
             level.tile_links = links(&tiles, parent);
@@ -247,8 +247,43 @@ pub(crate) fn code_problem(dims: UVec3, code: u64, prev: Option<u64>) -> Option<
     (prev > code).then_some(Error::OutOfOrder { coord, code })
 }
 
+/// Whether every one of the `n` codes `code(i)` lies inside `dims` (whose components are
+/// positive) and is greater than the one before, and `extra(i)` holds: a parallel pass without
+/// decoding (a coordinate is below a bound iff its interleaved bits, masked out of the code,
+/// are below the bound's interleaved bits). The error itself is found by [`code_problem`] only
+/// when this fails.
+pub(crate) fn all_codes_ok(
+    dims: UVec3,
+    n: usize,
+    code: impl Fn(usize) -> u64 + Sync,
+    extra: impl Fn(usize) -> bool + Sync,
+) -> bool {
+    let limit: [u64; 3] = std::array::from_fn(|a| {
+        let mut c = UVec3::ZERO;
+        c[a] = dims[a].saturating_sub(1);
+        morton::encode(c)
+    });
+    let inside = |c: u64| {
+        (c & AXIS_BITS[0] <= limit[0])
+            & (c & AXIS_BITS[1] <= limit[1])
+            & (c & AXIS_BITS[2] <= limit[2])
+    };
+    dims.min_element() > 0
+        && (0..n).into_par_iter().with_min_len(CHECK_LEN).all(|i| {
+            let c = code(i);
+            inside(c) & (i == 0 || code(i - 1) < c) && extra(i)
+        })
+}
+
+/// Items per rayon task of the input check (a few nanoseconds each).
+const CHECK_LEN: usize = 1 << 15;
+
 /// Checks the input, so the error names the first bad voxel.
 fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
+    let ok = all_codes_ok(dims, voxels.len(), |i| voxels[i].0, |i| voxels[i].1.check().is_none());
+    if ok {
+        return Ok(());
+    }
     let problem = |i: usize| -> Option<Error> {
         let (code, ref p) = voxels[i];
         if let Some(e) = code_problem(dims, code, i.checked_sub(1).map(|j| voxels[j].0)) {
@@ -257,11 +292,7 @@ fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
         let coord = morton::decode(code);
         p.check().map(|reason| Error::InvalidPayload { coord, reason })
     };
-    let first_bad = (0..voxels.len())
-        .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .find_first(|&i| problem(i).is_some());
-    match first_bad.and_then(problem) {
+    match (0..voxels.len()).find_map(problem) {
         Some(e) => Err(e),
         None => Ok(()),
     }
@@ -373,9 +404,9 @@ fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u32> 
     occ
 }
 
-/// Tile parents (node indices, ascending) under a dense level: each occupied node `q` marks
+/// Per node of a dense level: whether it gets a child tile. Each occupied node `q` marks
 /// `q − d` for `d ∈ SHIFTS[mask]`.
-fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u32> {
+fn dense_tile_marks<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<bool> {
     let mut marked = vec![false; level.payload.len()];
     for (&q, &m) in occupied.codes.iter().zip(occupied.mask) {
         let s = SHIFTS[m as usize];
@@ -390,47 +421,94 @@ fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u3
             }
         }
     }
-    (0..marked.len() as u32).filter(|&i| marked[i as usize]).collect()
+    marked
 }
 
-/// Tile parents (node indices, ascending) under a sparse level with links: node `n` is one iff
-/// a corner `n + d` (reached by forward links) is occupied with `d ∈ SHIFTS[its mask]`.
-fn sparse_tile_parents<P: Payload>(
-    level: &Level<P>,
-    occ: &[u32],
-    occupied: &Occupied<'_, P>,
-) -> Vec<u32> {
-    let links = &level.tile_links;
-    let hit = |i: u32, d: u32| {
-        i != NONE && {
-            let g = occ[i as usize];
-            g != NONE && SHIFTS[occupied.mask[g as usize] as usize] >> d & 1 == 1
+/// `BLOCK[x + 3y + 9z]` for a position in the 3×3×3 block of nodes starting at a tile's first
+/// node: which of the eight tiles (own, +x, +y, +xy, +z, +xz, +yz, +xyz: bit `a` for a step
+/// along axis `a`) holds it, and its index in that tile.
+const BLOCK: [(u8, u8); 27] = {
+    let mut t = [(0u8, 0u8); 27];
+    let mut p = 0;
+    while p < 27 {
+        let (x, y, z) = (p % 3, p / 3 % 3, p / 9);
+        t[p] = (
+            ((x >> 1) | (y >> 1) << 1 | (z >> 1) << 2) as u8,
+            ((x & 1) | (y & 1) << 1 | (z & 1) << 2) as u8,
+        );
+        p += 1;
+    }
+    t
+};
+
+/// `CORNER[k][d]`: the block position (`BLOCK`) of node `k + d` of a tile, `k, d ∈ {0,1}³`.
+const CORNER: [[u8; 8]; 8] = {
+    let mut t = [[0u8; 8]; 8];
+    let mut k = 0;
+    while k < 8 {
+        let mut d = 0;
+        while d < 8 {
+            let x = (k & 1) + (d & 1);
+            let y = (k >> 1 & 1) + (d >> 1 & 1);
+            let z = (k >> 2 & 1) + (d >> 2 & 1);
+            t[k][d] = (x + 3 * y + 9 * z) as u8;
+            d += 1;
         }
-    };
-    let hop = |i: u32, a: usize| if i == NONE { NONE } else { sparse_neighbour(links, i, a) };
-    (0..occ.len() as u32)
+        k += 1;
+    }
+    t
+};
+
+/// Per node of a sparse level whose masks and tile links are set: whether it gets a child tile,
+/// i.e. whether a corner `n + d` is occupied with `d ∈ SHIFTS[its mask]`. Per tile: the eight
+/// tiles of the 3×3×3 block of nodes at its first node are found by x-, then y-, then z-links
+/// (the tiles on a monotone path to an occupied corner exist: closure), their masks mapped
+/// through `SHIFTS`, and the 64 (node, corner) pairs read from that block.
+fn sparse_tile_marks<P>(level: &Level<P>) -> Vec<bool> {
+    let (mask, links) = (&level.mask, &level.tile_links);
+    let step =
+        |first: u32, a: usize| if first == NONE { NONE } else { links[first as usize / 8][a] };
+    let marks: Vec<[bool; 8]> = (0..links.len())
         .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .filter(|&n| {
-            if hit(n, 0) {
-                return true;
-            }
-            let [x, y, z] = [0, 1, 2].map(|a| sparse_neighbour(links, n, a));
-            let (xy, xz, yz) = (hop(x, 1), hop(x, 2), hop(y, 2));
-            hit(x, 1)
-                || hit(y, 2)
-                || hit(z, 4)
-                || hit(xy, 3)
-                || hit(xz, 5)
-                || hit(yz, 6)
-                || hit(hop(xy, 2), 7)
+        .with_min_len(MIN_LEN / 8)
+        .map(|t| {
+            let [x, y, z] = links[t];
+            let (xy, xz, yz) = (step(x, 1), step(x, 2), step(y, 2));
+            let tiles = [8 * t as u32, x, y, xy, z, xz, yz, step(xy, 2)];
+            let block: [u8; 27] = std::array::from_fn(|p| {
+                let (tile, j) = BLOCK[p];
+                let first = tiles[tile as usize];
+                if first == NONE { 0 } else { SHIFTS[mask[(first + j as u32) as usize] as usize] }
+            });
+            std::array::from_fn(|k| {
+                (0..8).fold(0u8, |any, d| any | block[CORNER[k][d] as usize] >> d) & 1 == 1
+            })
         })
-        .collect()
+        .collect();
+    marks.into_flattened()
+}
+
+/// The tile parents (node indices, ascending: tile `t` under `tiles[t]`) and child pointers
+/// (`8t` or [`NONE`]) of a level whose nodes `marked` get tiles. One branch-free pass.
+fn allocate_tiles(marked: &[bool]) -> (Vec<u32>, Vec<u32>) {
+    let count = marked.iter().filter(|&&m| m).count();
+    // One spare slot takes the unmarked nodes' writes.
+    let mut tiles = vec![0u32; count + 1];
+    let mut child = Vec::with_capacity(marked.len());
+    let mut rank = 0usize;
+    for (i, &m) in marked.iter().enumerate() {
+        child.push(if m { 8 * rank as u32 } else { NONE });
+        tiles[rank] = i as u32;
+        rank += m as usize;
+    }
+    tiles.truncate(count);
+    (tiles, child)
 }
 
 /// Payloads of the tiles under `tiles` (node indices of the level above, whose occupied index
 /// per node is `occ_above`), and, if `with_occupancy`, the occupied index per node of this level.
-/// Each array is written once, in parallel, without a fill pass.
+/// Per tile: its occupied children are a run of `here` starting at the parent's first child, in
+/// the order of the parent's mask bits. Each array is written once, in parallel.
 fn fill_tiles<P: Payload>(
     tiles: &[u32],
     occ_above: &[u32],
@@ -438,34 +516,29 @@ fn fill_tiles<P: Payload>(
     here: &Occupied<'_, P>,
     with_occupancy: bool,
 ) -> (Vec<P>, Vec<u32>) {
-    // Node 8t + k is occupied iff bit k of its parent's mask is; its index in `here` is the
-    // parent's first child plus the occupied siblings before it.
-    let occupied_index = |i: usize| -> u32 {
-        let g = occ_above[tiles[i / 8] as usize];
-        if g == NONE {
-            return NONE;
+    let tile = |t: usize| -> ([P; 8], [u32; 8]) {
+        let (mut payload, mut occ) = ([P::empty(); 8], [NONE; 8]);
+        let g = occ_above[tiles[t] as usize];
+        if g != NONE {
+            let (mut m, mut j) = (above.mask[g as usize], above.first[g as usize]);
+            while m != 0 {
+                let k = m.trailing_zeros() as usize;
+                payload[k] = here.payload[j as usize];
+                occ[k] = j;
+                j += 1;
+                m &= m - 1;
+            }
         }
-        let (m, k) = (above.mask[g as usize] as u32, i % 8);
-        if m >> k & 1 == 0 {
-            NONE
-        } else {
-            above.first[g as usize] + (m & ((1 << k) - 1)).count_ones()
-        }
-    };
-    let n = 8 * tiles.len();
-    let payload_of = |j: u32| if j == NONE { P::empty() } else { here.payload[j as usize] };
-    if with_occupancy {
-        let occ: Vec<u32> =
-            (0..n).into_par_iter().with_min_len(MIN_LEN).map(occupied_index).collect();
-        let payload = occ.par_iter().with_min_len(MIN_LEN).map(|&j| payload_of(j)).collect();
         (payload, occ)
+    };
+    let par = (0..tiles.len()).into_par_iter().with_min_len(MIN_LEN / 8);
+    if with_occupancy {
+        let (mut payload, mut occ) = (Vec::new(), Vec::new());
+        par.map(tile).unzip_into_vecs(&mut payload, &mut occ);
+        (payload.into_flattened(), occ.into_flattened())
     } else {
-        let payload = (0..n)
-            .into_par_iter()
-            .with_min_len(MIN_LEN)
-            .map(|i| payload_of(occupied_index(i)))
-            .collect();
-        (payload, Vec::new())
+        let payload: Vec<[P; 8]> = par.map(|t| tile(t).0).collect();
+        (payload.into_flattened(), Vec::new())
     }
 }
 

@@ -25,7 +25,7 @@ use voxlod_format::{GridSpec, morton};
 
 #[cfg(doc)]
 use crate::Octree;
-use crate::build::{MIN_LEN, code_problem, plan};
+use crate::build::{all_codes_ok, code_problem, plan};
 use crate::octree::{BuildOptions, NONE};
 use crate::{Error, Result};
 
@@ -96,13 +96,12 @@ impl Topology {
         grid.validate()?;
         let (depth, first_dense) = plan(grid.dims, options)?;
         let dims = grid.dims;
-        let problem = |i: usize| code_problem(dims, codes[i], i.checked_sub(1).map(|j| codes[j]));
-        let first_bad = (0..codes.len())
-            .into_par_iter()
-            .with_min_len(MIN_LEN)
-            .find_first(|&i| problem(i).is_some());
-        if let Some(e) = first_bad.and_then(problem) {
-            return Err(e);
+        if !all_codes_ok(dims, codes.len(), |i| codes[i], |_| true) {
+            let problem =
+                |i: usize| code_problem(dims, codes[i], i.checked_sub(1).map(|j| codes[j]));
+            if let Some(e) = (0..codes.len()).find_map(problem) {
+                return Err(e);
+            }
         }
         Self::from_checked(grid, depth, first_dense, codes)
     }
@@ -195,28 +194,70 @@ impl Topology {
     }
 }
 
+/// Codes per rayon task of [`coarsen`]; smaller levels are coarsened on one thread.
+const COARSEN_CHUNK: usize = 1 << 15;
+
 /// The occupied level above sorted `codes`: distinct parents, their children's masks and first
-/// indices. Counts the parents first so every array is allocated once at its final size.
+/// indices. Two passes over chunks that do not split a sibling group, in parallel: count each
+/// chunk's parents, then write them at their offsets into arrays allocated once at their final
+/// size (zeroed by the allocator, so nothing is written twice).
 fn coarsen(codes: &[u64]) -> TopologyLevel {
-    let parents = match codes.first() {
-        None => 0,
-        Some(_) => 1 + codes.windows(2).filter(|w| w[0] >> 3 != w[1] >> 3).count(),
+    let n = codes.len();
+    // Chunk starts, moved forward to the next sibling group (at most 7 steps).
+    let mut bounds: Vec<usize> = (0..n.div_ceil(COARSEN_CHUNK))
+        .map(|k| {
+            let mut s = k * COARSEN_CHUNK;
+            while s > 0 && s < n && codes[s] >> 3 == codes[s - 1] >> 3 {
+                s += 1;
+            }
+            s
+        })
+        .collect();
+    bounds.push(n);
+    bounds.dedup();
+    let count = |r: &[usize]| {
+        let c = &codes[r[0]..r[1]];
+        c.len().min(1) + c.windows(2).filter(|w| w[0] >> 3 != w[1] >> 3).count()
     };
-    let mut out = TopologyLevel {
-        codes: Vec::with_capacity(parents),
-        mask: Vec::with_capacity(parents),
-        first: Vec::with_capacity(parents),
+    // One chunk: no rayon call (each one from outside the pool wakes a worker).
+    let counts: Vec<usize> = if bounds.len() <= 2 {
+        bounds.windows(2).map(count).collect()
+    } else {
+        bounds.par_windows(2).map(count).collect()
     };
-    let mut last = u64::MAX;
-    for (i, &c) in codes.iter().enumerate() {
-        let p = c >> 3;
-        if p != last {
-            out.codes.push(p);
-            out.mask.push(0);
-            out.first.push(i as u32);
+    let total: usize = counts.iter().sum();
+    let mut out =
+        TopologyLevel { codes: vec![0; total], mask: vec![0; total], first: vec![0; total] };
+    // Disjoint output slices per chunk.
+    let mut jobs = Vec::with_capacity(counts.len());
+    let (mut oc, mut om, mut of) = (&mut out.codes[..], &mut out.mask[..], &mut out.first[..]);
+    for (r, &k) in bounds.windows(2).zip(&counts) {
+        let (c, rest_c) = std::mem::take(&mut oc).split_at_mut(k);
+        let (m, rest_m) = std::mem::take(&mut om).split_at_mut(k);
+        let (f, rest_f) = std::mem::take(&mut of).split_at_mut(k);
+        (oc, om, of) = (rest_c, rest_m, rest_f);
+        jobs.push((r[0], r[1], c, m, f));
+    }
+    // Branch-free (sibling groups of 1–8 codes make a per-group branch unpredictable): every
+    // code rewrites its group's slot, the last write leaves the group's full mask.
+    let fill = |(lo, hi, c, m, f): (usize, usize, &mut [u64], &mut [u8], &mut [u32])| {
+        let (mut j, mut last, mut start, mut acc) = (0usize, codes[lo] >> 3, lo as u32, 0u8);
+        for (i, &code) in codes[lo..hi].iter().enumerate() {
+            let p = code >> 3;
+            let new = p != last;
+            j += new as usize;
+            start = if new { (lo + i) as u32 } else { start };
+            acc = if new { 0 } else { acc } | 1 << (code & 7);
             last = p;
+            c[j] = p;
+            m[j] = acc;
+            f[j] = start;
         }
-        *out.mask.last_mut().expect("pushed above") |= 1 << (c & 7);
+    };
+    if jobs.len() <= 1 {
+        jobs.into_iter().for_each(fill);
+    } else {
+        jobs.into_par_iter().for_each(fill);
     }
     out
 }
