@@ -33,9 +33,7 @@ use glam::UVec3;
 use rayon::prelude::*;
 use voxlod_format::{BrickMap, GridSpec, morton};
 
-use crate::octree::{
-    BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree, sparse_neighbour,
-};
+use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 use crate::payload::Payload;
 use crate::topology::{Topology, TopologyLevel};
 use crate::{Error, Result};
@@ -268,10 +266,17 @@ pub(crate) fn all_codes_ok(
             & (c & AXIS_BITS[1] <= limit[1])
             & (c & AXIS_BITS[2] <= limit[2])
     };
+    // Chunks checked without early exit inside (branch-free), in parallel.
     dims.min_element() > 0
-        && (0..n).into_par_iter().with_min_len(CHECK_LEN).all(|i| {
-            let c = code(i);
-            inside(c) & (i == 0 || code(i - 1) < c) && extra(i)
+        && (0..n.div_ceil(CHECK_LEN)).into_par_iter().all(|chunk| {
+            let (lo, hi) = (chunk * CHECK_LEN, ((chunk + 1) * CHECK_LEN).min(n));
+            let mut prev = if lo == 0 { None } else { Some(code(lo - 1)) };
+            (lo..hi).fold(true, |ok, i| {
+                let c = code(i);
+                let ordered = prev.is_none_or(|p| p < c);
+                prev = Some(c);
+                ok & inside(c) & ordered & extra(i)
+            })
         })
 }
 
@@ -542,21 +547,65 @@ fn fill_tiles<P: Payload>(
     }
 }
 
-/// Tile links of the sparse level under `tiles` (node indices of `parent`, whose child pointers
-/// are set and, if sparse, tile links built): tile `t`'s +a neighbour tile is the child tile of
-/// its parent's +a neighbour.
+/// Parent tiles per rayon task of [`links`].
+const LINK_RANGE: usize = 1024;
+
+/// Tile links of the sparse level under `tiles` (node indices of `parent`, ascending, whose
+/// child pointers are set and, if sparse, tile links built): the +a neighbour of the tile under
+/// parent node `p` is the child tile of `p`'s +a neighbour. Per parent tile (8 nodes, whose
+/// child tiles are consecutive): its own 8 child pointers and those of its 3 neighbour tiles,
+/// read as 4 runs, give the links of all its child tiles. Ranges of parent tiles in parallel,
+/// each writing its own part of the output (found from `tiles`).
 fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
-    let neighbour = |p: u32, a: usize| -> u32 {
-        let q = if parent.dense {
-            morton_inc(p as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+    let child = &parent.child;
+    let n = child.len();
+    // First node of parent tile `t`'s +a neighbour tile, or NONE. A dense level of fewer than
+    // 8 nodes is the 1-node root: no neighbours.
+    let neighbour_tile = |t: usize, a: usize| -> u32 {
+        if !parent.dense {
+            parent.tile_links[t][a]
+        } else if n < 8 {
+            NONE
         } else {
-            sparse_neighbour(&parent.tile_links, p, a)
-        };
-        if q == NONE { NONE } else { parent.child[q as usize] }
+            // Node `8t + bit` has its a-bit set: its +a neighbour is node 0 of that tile.
+            morton_inc((8 * t + (1 << a)) as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+        }
     };
-    tiles
-        .par_iter()
-        .with_min_len(MIN_LEN / 8)
-        .map(|&p| std::array::from_fn(|a| neighbour(p, a)))
-        .collect()
+    let mut out = vec![[0u32; 3]; tiles.len()];
+    let mut jobs = Vec::new();
+    let mut rest = &mut out[..];
+    let mut done = 0;
+    for t0 in (0..n.div_ceil(8)).step_by(LINK_RANGE) {
+        let t1 = (t0 + LINK_RANGE).min(n.div_ceil(8));
+        let end = tiles.partition_point(|&p| (p as usize) < 8 * t1);
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(end - done);
+        (rest, done) = (tail, end);
+        jobs.push((t0, t1, part));
+    }
+    jobs.into_par_iter().for_each(|(t0, t1, part)| {
+        let mut w = 0;
+        for t in t0..t1 {
+            let own: [u32; 8] =
+                std::array::from_fn(|k| child.get(8 * t + k).copied().unwrap_or(NONE));
+            if own == [NONE; 8] {
+                continue;
+            }
+            let near: [[u32; 8]; 3] = std::array::from_fn(|a| {
+                let f = neighbour_tile(t, a);
+                if f == NONE { [NONE; 8] } else { std::array::from_fn(|k| child[f as usize + k]) }
+            });
+            for (k, &c) in own.iter().enumerate() {
+                if c == NONE {
+                    continue;
+                }
+                part[w] = std::array::from_fn(|a| {
+                    let bit = 1 << a;
+                    if k & bit == 0 { own[k | bit] } else { near[a][k & !bit] }
+                });
+                w += 1;
+            }
+        }
+        debug_assert_eq!(w, part.len());
+    });
+    out
 }
