@@ -14,15 +14,18 @@
 //!      a backward neighbour of an occupied child of some occupied `q + d`, `d ∈ {0,1}³`; that
 //!      is the case iff `d` is a subset of the axes along which one of `q + d`'s occupied children
 //!      lies in the lower half (`SHIFTS`). On the dense level the occupied nodes mark their
-//!      `q − d` directly (Morton decrement); on a sparse level every node reads its seven forward
-//!      corners through the level's links, as the sampler does. Marked nodes, in storage order,
-//!      are the tiles in Morton order: tile `t` starts at node `8t`;
+//!      `q − d` directly (Morton decrement); on a sparse level each tile of the level reads the
+//!      masks of the 3×3×3 block of nodes at its first node (its own tile and 7 neighbour tiles,
+//!      found by x-, y-, then z-links, as the sampler hops) and marks its nodes from them. Marked
+//!      nodes, in storage order, are the tiles in Morton order (one branch-free pass gives the
+//!      tile list and the child pointers): tile `t` starts at node `8t`;
 //!    - *payloads*: tile `t`'s occupied children are a run of the occupied list, found through the
 //!      parent's first-child index and mask (no search);
 //!    - *links*: per tile, the +a neighbour tile is the child tile of the parent's +a neighbour
-//!      (through the parent level's links, or a Morton increment on the dense level); the nodes'
-//!      neighbours follow from the tile links (`octree` module docs). It finds every existing
-//!      neighbour because a tile exists exactly when its parent is a node of the closure.
+//!      (through the parent level's links, or a Morton increment on the dense level), computed
+//!      per parent tile from four runs of child pointers; the nodes' neighbours follow from the
+//!      tile links (`octree` module docs). It finds every existing neighbour because a tile
+//!      exists exactly when its parent is a node of the closure.
 //!
 //! The first build (sorted closure parents, per-node link search of the parents) is kept in
 //! `reference` (test builds), and a test asserts both build identical octrees.
