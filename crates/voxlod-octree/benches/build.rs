@@ -3,10 +3,14 @@
 //! this crate cannot use the voxelizers of voxlod-cpu.
 //!
 //! `cargo bench -p voxlod-octree --bench build -- --warm-up-time 1 --measurement-time 3`.
-//! Before the criterion runs it prints the memory breakdown per occupied voxel. Throughput is
-//! in voxels per second for builds, samples per second for sampling.
-//! - `build/topology`: an opacity-only payload (4 bytes, trivial prefilter): the tree, the
-//!   closure nodes and the neighbour links, what the 20 M voxels/s target is about;
+//! Before the criterion runs it prints the memory breakdown per occupied voxel and the mean
+//! wall and CPU time of each build (CPU of the build call only, all threads; the input clone
+//! and the drop of the result are outside). Throughput is in voxels per second for builds,
+//! samples per second for sampling. Each build includes the ones above it:
+//! - `build/topology`: [`Topology`] alone, the occupied levels and their child structure (an
+//!   SVO without payloads, closure or links), what the 20 M voxels/s target is about;
+//! - `build/links`: the octree with an opacity-only payload (4 bytes, trivial prefilter): the
+//!   topology, the closure nodes and tiles, the dense top levels and the neighbour links;
 //! - `build/averages`, `build/averages+directional`: the same with Averages pre-filtering (28
 //!   bytes), and with six directional opacities on top;
 //! - `sample/*`: quadrilinear samples at random points near the shell, footprints 1–16 voxels,
@@ -18,7 +22,7 @@ use std::hint::black_box;
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::{GridSpec, morton};
-use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree, Payload};
+use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree, Payload, Topology};
 
 const RES: u32 = 256;
 const RADIUS: f32 = 126.0;
@@ -72,7 +76,7 @@ fn grid() -> GridSpec {
     GridSpec::new(DVec3::ZERO, 1.0 / RES as f64, UVec3::splat(RES)).expect("valid grid")
 }
 
-fn report(tree: &Octree<AveragePayload>) {
+fn report(tree: &Octree<AveragePayload>, topology: &Topology) {
     let s = tree.memory_stats();
     let pv = |b| s.per_voxel(b);
     eprintln!(
@@ -102,6 +106,10 @@ fn report(tree: &Octree<AveragePayload>) {
         pv(s.total_bytes()),
         s.total_bytes() as f64 / 1e6
     );
+    eprintln!(
+        "  topology alone (occupied levels: codes, masks, first-child indices): {:.2} B/voxel",
+        s.per_voxel(topology.memory_bytes())
+    );
 }
 
 /// CPU time of this process so far (all threads), from `/proc/self/task/*/schedstat` (ns on
@@ -124,31 +132,42 @@ fn user_sys() -> Option<(f64, f64)> {
     Some((f.get(11)?.parse::<f64>().ok()? / 100.0, f.get(12)?.parse::<f64>().ok()? / 100.0))
 }
 
-/// Mean wall and CPU time of `runs` calls of `f`, printed with the throughput.
-fn time_cpu<T>(what: &str, n: u64, runs: u32, mut f: impl FnMut() -> T) {
-    let _ = black_box(f());
-    let (t0, c0, us0) = (std::time::Instant::now(), cpu_ns(), user_sys());
+/// Mean wall and CPU time of `runs` calls of `run` on inputs made by `setup` (not timed), the
+/// result dropped outside the timed span; printed with the throughput.
+fn time_cpu<I, T>(
+    what: &str,
+    n: u64,
+    runs: u32,
+    mut setup: impl FnMut() -> I,
+    mut run: impl FnMut(I) -> T,
+) {
+    drop(black_box(run(setup())));
+    let (mut wall, mut cpu, mut user, mut sys) = (0.0, Some(0.0), 0.0, 0.0);
     for _ in 0..runs {
-        black_box(f());
+        let input = setup();
+        let (c0, us0, t0) = (cpu_ns(), user_sys(), std::time::Instant::now());
+        let out = black_box(run(input));
+        let (t1, c1, us1) = (t0.elapsed().as_secs_f64(), cpu_ns(), user_sys());
+        drop(out);
+        wall += t1;
+        cpu = cpu.zip(c1.zip(c0)).map(|(sum, (c1, c0))| sum + (c1 - c0) as f64 * 1e-9);
+        if let (Some((u1, s1)), Some((u0, s0))) = (us1, us0) {
+            user += u1 - u0;
+            sys += s1 - s0;
+        }
     }
-    let wall = t0.elapsed().as_secs_f64() / runs as f64;
-    let cpu = cpu_ns().zip(c0).map(|(c1, c0)| (c1 - c0) as f64 * 1e-9 / runs as f64);
+    let r = runs as f64;
+    let (wall, cpu) = (wall / r, cpu.map(|c| c / r));
     let threads = rayon::current_num_threads();
-    let split = match (user_sys(), us0) {
-        (Some((u1, s1)), Some((u0, s0))) => format!(
-            "; user {:.1} ms, kernel {:.1} ms",
-            (u1 - u0) * 1e3 / runs as f64,
-            (s1 - s0) * 1e3 / runs as f64
-        ),
-        _ => String::new(),
-    };
     match cpu {
         Some(cpu) => eprintln!(
-            "  {what}: wall {:.2} ms ({:.2} M/s), CPU {:.2} ms ({:.2} M/s per CPU-second; {threads} threads{split})",
+            "  {what}: wall {:.2} ms ({:.2} M/s), CPU {:.2} ms ({:.2} M per CPU-second; {threads} threads; user {:.1} ms, kernel {:.1} ms)",
             wall * 1e3,
             n as f64 / wall / 1e6,
             cpu * 1e3,
-            n as f64 / cpu / 1e6
+            n as f64 / cpu / 1e6,
+            user * 1e3 / r,
+            sys * 1e3 / r
         ),
         None => eprintln!("  {what}: wall {:.2} ms ({:.2} M/s)", wall * 1e3, n as f64 / wall / 1e6),
     }
@@ -159,48 +178,35 @@ fn bench(c: &mut Criterion) {
     let n = voxels.len() as u64;
     let options = BuildOptions::default();
     let tree = Octree::from_morton_sorted(grid(), voxels.clone(), &options).expect("built");
-    report(&tree);
+    let codes: Vec<u64> = voxels.iter().map(|v| v.0).collect();
+    let topology = Topology::from_morton_sorted(grid(), codes.clone(), &options).expect("built");
+    report(&tree, &topology);
+    drop(topology);
 
     let opacity: Vec<(u64, Opacity)> =
         voxels.iter().map(|&(k, p)| (k, Opacity(p.opacity))).collect();
     let directional: Vec<(u64, Directional<AveragePayload>)> =
         voxels.iter().map(|&(k, p)| (k, Directional::isotropic(p))).collect();
-    eprintln!(
-        "build, mean of 20, 10, 10 runs (input clone and the previous tree's drop included):"
-    );
-    time_cpu("topology + links", n, 20, || {
-        Octree::from_morton_sorted(grid(), opacity.clone(), &options).expect("built")
-    });
-    time_cpu("+ Averages prefilter", n, 10, || {
-        Octree::from_morton_sorted(grid(), voxels.clone(), &options).expect("built")
-    });
-    time_cpu("+ Averages + directional", n, 10, || {
-        Octree::from_morton_sorted(grid(), directional.clone(), &options).expect("built")
-    });
+    eprintln!("build, mean of 40, 20, 10, 10 runs (CPU: the build call only):");
+    let topo = |v| Topology::from_morton_sorted(grid(), v, &options).expect("built");
+    time_cpu("(a) topology", n, 40, || codes.clone(), topo);
+    let links = |v| Octree::from_morton_sorted(grid(), v, &options).expect("built");
+    time_cpu("(b) + closure, tiles, links (opacity payload)", n, 20, || opacity.clone(), links);
+    let averages = |v| Octree::from_morton_sorted(grid(), v, &options).expect("built");
+    time_cpu("(c) + Averages prefilter", n, 10, || voxels.clone(), averages);
+    let directional_build = |v| Octree::from_morton_sorted(grid(), v, &options).expect("built");
+    time_cpu("(d) + directional opacities", n, 10, || directional.clone(), directional_build);
 
     let mut g = c.benchmark_group("build");
     g.throughput(Throughput::Elements(n));
     g.sample_size(10);
-    g.bench_function("topology", |b| {
-        b.iter_batched(
-            || opacity.clone(),
-            |v| Octree::from_morton_sorted(grid(), v, &options).expect("built"),
-            BatchSize::LargeInput,
-        )
-    });
+    g.bench_function("topology", |b| b.iter_batched(|| codes.clone(), topo, BatchSize::LargeInput));
+    g.bench_function("links", |b| b.iter_batched(|| opacity.clone(), links, BatchSize::LargeInput));
     g.bench_function("averages", |b| {
-        b.iter_batched(
-            || voxels.clone(),
-            |v| Octree::from_morton_sorted(grid(), v, &options).expect("built"),
-            BatchSize::LargeInput,
-        )
+        b.iter_batched(|| voxels.clone(), averages, BatchSize::LargeInput)
     });
     g.bench_function("averages+directional", |b| {
-        b.iter_batched(
-            || directional.clone(),
-            |v| Octree::from_morton_sorted(grid(), v, &options).expect("built"),
-            BatchSize::LargeInput,
-        )
+        b.iter_batched(|| directional.clone(), directional_build, BatchSize::LargeInput)
     });
     g.finish();
 

@@ -3,26 +3,29 @@
 //! nodes of each step):
 //! 1. **Input check**: coordinates inside the grid, strictly increasing Morton codes (no
 //!    duplicate), every payload accepted by [`Payload::check`].
-//! 2. **Occupied levels, bottom-up**: the occupied nodes of level `l+1` are the distinct codes
-//!    `c >> 3` of level `l`; each one's payload is [`Payload::prefilter`] of its (up to) eight
-//!    occupied children, the others counting as empty, and it records its children's mask and
-//!    the index of its first occupied child. Sorted input stays sorted at every level.
+//! 2. **Occupied levels, bottom-up**: the [`Topology`] (the occupied nodes of level `l+1` are the
+//!    distinct codes `c >> 3` of level `l`, each with its children's mask and the index of its
+//!    first occupied child; sorted input stays sorted at every level), then per level each
+//!    occupied node's payload, [`Payload::prefilter`] of its (up to) eight occupied children,
+//!    the others counting as empty.
 //! 3. **Sparse levels, top-down**, each from the finished level above it (`octree` module docs
 //!    for the node set):
 //!    - *tiles*: a node `q` of level `l+1` gets a 2×2×2 tile of children iff it is the parent of
 //!      a backward neighbour of an occupied child of some occupied `q + d`, `d ∈ {0,1}³`; that
 //!      is the case iff `d` is a subset of the axes along which one of `q + d`'s occupied children
 //!      lies in the lower half (`SHIFTS`). On the dense level the occupied nodes mark their
-//!      `q − d` directly (Morton decrement); on a sparse level every node reads its seven forward
-//!      corners through the level's links, as the sampler does. Marked nodes, in storage order,
-//!      are the tiles in Morton order: tile `t` starts at node `8t`;
+//!      `q − d` directly (Morton decrement); on a sparse level each tile of the level reads the
+//!      masks of the 3×3×3 block of nodes at its first node (its own tile and 7 neighbour tiles,
+//!      found by x-, y-, then z-links, as the sampler hops) and marks its nodes from them. Marked
+//!      nodes, in storage order, are the tiles in Morton order (one branch-free pass gives the
+//!      tile list and the child pointers): tile `t` starts at node `8t`;
 //!    - *payloads*: tile `t`'s occupied children are a run of the occupied list, found through the
 //!      parent's first-child index and mask (no search);
 //!    - *links*: per tile, the +a neighbour tile is the child tile of the parent's +a neighbour
-//!      (through the parent level's links, or a Morton increment on the dense level); child `k`'s
-//!      +a neighbour is `k | bit` in its own tile when `k`'s a-bit is 0, else child `k & !bit` of
-//!      the neighbour tile. It finds every existing neighbour because a tile exists exactly when
-//!      its parent is a node of the closure.
+//!      (through the parent level's links, or a Morton increment on the dense level), computed
+//!      per parent tile from four runs of child pointers; the nodes' neighbours follow from the
+//!      tile links (`octree` module docs). It finds every existing neighbour because a tile
+//!      exists exactly when its parent is a node of the closure.
 //!
 //! The first build (sorted closure parents, per-node link search of the parents) is kept in
 //! `reference` (test builds), and a test asserts both build identical octrees.
@@ -35,22 +38,24 @@ use voxlod_format::{BrickMap, GridSpec, morton};
 
 use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 use crate::payload::Payload;
+use crate::topology::{Topology, TopologyLevel};
 use crate::{Error, Result};
 
 #[cfg(test)]
 pub(crate) mod reference;
 
 /// Items per rayon task below which splitting does not pay.
-const MIN_LEN: usize = 2048;
+pub(crate) const MIN_LEN: usize = 2048;
 
-/// Occupied nodes of one level: sorted Morton codes and their payloads.
-struct Occupied<P> {
-    codes: Vec<u64>,
-    payload: Vec<P>,
+/// Occupied nodes of one level: a [`TopologyLevel`]'s arrays and the nodes' payloads.
+struct Occupied<'a, P> {
+    /// Sorted Morton codes.
+    codes: &'a [u64],
     /// Per node (above level 0): bit `k` set if child `k` is occupied.
-    mask: Vec<u8>,
+    mask: &'a [u8],
     /// Per node (above level 0): index of its first occupied child in the level below.
-    first: Vec<u32>,
+    first: &'a [u32],
+    payload: &'a [P],
 }
 
 impl<P: Payload> Octree<P> {
@@ -103,6 +108,7 @@ impl<P: Payload> Octree<P> {
 
     /// Builds an octree from `(Morton code, payload)` pairs in strictly increasing code order.
     /// Out-of-order or repeated codes, voxels outside the grid and rejected payloads are errors.
+    /// The same as [`Topology::from_morton_sorted`] followed by [`Octree::from_topology`].
     pub fn from_morton_sorted(
         grid: GridSpec,
         voxels: Vec<(u64, P)>,
@@ -111,16 +117,46 @@ impl<P: Payload> Octree<P> {
         grid.validate()?;
         let (depth, first_dense) = plan(grid.dims, options)?;
         check_input(grid.dims, &voxels)?;
-        if voxels.len() as u64 >= NONE as u64 {
-            return Err(Error::TooManyNodes { level: 0, nodes: voxels.len() as u64 });
+        let (codes, payload): (Vec<u64>, Vec<P>) = voxels.into_iter().unzip();
+        let topology = Topology::from_checked(grid, depth, first_dense, codes)?;
+        Self::extend(topology, payload)
+    }
+
+    /// Extends a [`Topology`] into an octree: `payload[i]` is the payload of voxel `i` of the
+    /// topology (its level-0 node, in Morton order). Pre-filters the payloads up the occupied
+    /// levels, adds the closure nodes and tiles, the dense top levels (down to the topology's
+    /// [`Topology::first_dense`]) and the neighbour links. A payload count other than the
+    /// topology's voxel count, or a payload [`Payload::check`] rejects, is an error (naming the
+    /// voxel).
+    pub fn from_topology(topology: Topology, payload: Vec<P>) -> Result<Self> {
+        let voxels = topology.voxel_count();
+        if payload.len() as u64 != voxels {
+            return Err(Error::PayloadCount { voxels, payloads: payload.len() as u64 });
         }
-        let voxel_count = voxels.len() as u64;
-        let (codes, payload) = voxels.into_iter().unzip();
-        let mut occupied = vec![Occupied { codes, payload, mask: Vec::new(), first: Vec::new() }];
-        for l in 1..=depth as usize {
-            let next = coarsen(&occupied[l - 1]);
-            occupied.push(next);
+        let bad = payload.par_iter().with_min_len(MIN_LEN).position_first(|p| p.check().is_some());
+        if let Some(i) = bad {
+            let coord = morton::decode(topology.levels[0].codes[i]);
+            let reason = payload[i].check().unwrap_or("rejected");
+            return Err(Error::InvalidPayload { coord, reason });
         }
+        Self::extend(topology, payload)
+    }
+
+    /// The build after the input checks (module docs, steps 2–3).
+    fn extend(topology: Topology, payload: Vec<P>) -> Result<Self> {
+        let Topology { grid, depth, first_dense, levels: topo } = topology;
+        let voxel_count = topo[0].codes.len() as u64;
+        let mut payloads = Vec::with_capacity(topo.len());
+        payloads.push(payload);
+        for l in 1..topo.len() {
+            let next = prefilter_level(&topo[l], &payloads[l - 1]);
+            payloads.push(next);
+        }
+        let occupied: Vec<Occupied<'_, P>> = topo
+            .iter()
+            .zip(&payloads)
+            .map(|(t, p)| Occupied { codes: &t.codes, mask: &t.mask, first: &t.first, payload: p })
+            .collect();
         let fd = first_dense as usize;
         let mut levels: Vec<Level<P>> = (0..=depth as usize)
             .into_par_iter()
@@ -129,14 +165,13 @@ impl<P: Payload> Octree<P> {
                 if l >= fd {
                     dense_level(res_log2, &occupied[l])
                 } else {
-                    let empty = Vec::new();
                     Level {
                         res_log2,
                         dense: false,
-                        payload: empty,
+                        payload: Vec::new(),
                         child: Vec::new(),
                         mask: Vec::new(),
-                        links: Vec::new(),
+                        tile_links: Vec::new(),
                     }
                 }
             })
@@ -148,27 +183,27 @@ impl<P: Payload> Octree<P> {
             let (lower, upper) = levels.split_at_mut(l + 1);
             let (level, parent) = (&mut lower[l], &mut upper[0]);
             let (occ, occ_parent) = (&occupied[l], &occupied[l + 1]);
-            let tiles = if parent.dense {
-                dense_tile_parents(parent, occ_parent)
-            } else {
-                sparse_tile_parents(parent, &occ_above, occ_parent)
-            };
-            let nodes = 8 * tiles.len() as u64;
-            if nodes >= NONE as u64 {
-                return Err(Error::TooManyNodes { level: l as u32, nodes });
-            }
-            parent.child = vec![NONE; parent.payload.len()];
-            for (rank, &p) in tiles.iter().enumerate() {
-                parent.child[p as usize] = 8 * rank as u32;
-            }
+            // Masks first: on a sparse parent level the tiles are read from them.
             parent.mask = occ_above
                 .par_iter()
                 .with_min_len(MIN_LEN)
                 .map(|&g| if g == NONE { 0 } else { occ_parent.mask[g as usize] })
                 .collect();
+            let marked = if parent.dense {
+                dense_tile_marks(parent, occ_parent)
+            } else {
+                sparse_tile_marks(parent)
+            };
+            let (tiles, child) = allocate_tiles(&marked);
+            drop(marked);
+            let nodes = 8 * tiles.len() as u64;
+            if nodes >= NONE as u64 {
+                return Err(Error::TooManyNodes { level: l as u32, nodes });
+            }
+            parent.child = child;
             let (payload, occ_here) = fill_tiles(&tiles, &occ_above, occ_parent, occ, l > 0);
             level.payload = payload;
-            level.links = links(&tiles, parent);
+            level.tile_links = links(&tiles, parent);
             occ_above = occ_here;
         }
         let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
@@ -199,59 +234,95 @@ pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
     Ok((depth, depth - options.dense_log2.min(depth)))
 }
 
+/// What is wrong with voxel `code` after `prev` (outside the grid, repeated, out of order), if
+/// anything.
+pub(crate) fn code_problem(dims: UVec3, code: u64, prev: Option<u64>) -> Option<Error> {
+    let coord = morton::decode(code);
+    if code >> 63 != 0 || !coord.cmplt(dims).all() {
+        return Some(Error::OutOfBounds { coord, dims });
+    }
+    let prev = prev?;
+    if prev == code {
+        return Some(Error::DuplicateVoxel { coord });
+    }
+    (prev > code).then_some(Error::OutOfOrder { coord, code })
+}
+
+/// Whether every one of the `n` codes `code(i)` lies inside `dims` (whose components are
+/// positive) and is greater than the one before, and `extra(i)` holds: a parallel pass without
+/// decoding (a coordinate is below a bound iff its interleaved bits, masked out of the code,
+/// are below the bound's interleaved bits). The error itself is found by [`code_problem`] only
+/// when this fails.
+pub(crate) fn all_codes_ok(
+    dims: UVec3,
+    n: usize,
+    code: impl Fn(usize) -> u64 + Sync,
+    extra: impl Fn(usize) -> bool + Sync,
+) -> bool {
+    let limit: [u64; 3] = std::array::from_fn(|a| {
+        let mut c = UVec3::ZERO;
+        c[a] = dims[a].saturating_sub(1);
+        morton::encode(c)
+    });
+    let inside = |c: u64| {
+        (c & AXIS_BITS[0] <= limit[0])
+            & (c & AXIS_BITS[1] <= limit[1])
+            & (c & AXIS_BITS[2] <= limit[2])
+    };
+    // Chunks checked without early exit inside (branch-free), in parallel.
+    dims.min_element() > 0
+        && (0..n.div_ceil(CHECK_LEN)).into_par_iter().all(|chunk| {
+            let (lo, hi) = (chunk * CHECK_LEN, ((chunk + 1) * CHECK_LEN).min(n));
+            let mut prev = if lo == 0 { None } else { Some(code(lo - 1)) };
+            (lo..hi).fold(true, |ok, i| {
+                let c = code(i);
+                let ordered = prev.is_none_or(|p| p < c);
+                prev = Some(c);
+                ok & inside(c) & ordered & extra(i)
+            })
+        })
+}
+
+/// Items per rayon task of the input check (a few nanoseconds each).
+const CHECK_LEN: usize = 1 << 15;
+
 /// Checks the input, so the error names the first bad voxel.
 fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
+    let ok = all_codes_ok(dims, voxels.len(), |i| voxels[i].0, |i| voxels[i].1.check().is_none());
+    if ok {
+        return Ok(());
+    }
     let problem = |i: usize| -> Option<Error> {
         let (code, ref p) = voxels[i];
+        if let Some(e) = code_problem(dims, code, i.checked_sub(1).map(|j| voxels[j].0)) {
+            return Some(e);
+        }
         let coord = morton::decode(code);
-        if code >> 63 != 0 || !coord.cmplt(dims).all() {
-            return Some(Error::OutOfBounds { coord, dims });
-        }
-        if i > 0 {
-            let prev = voxels[i - 1].0;
-            if prev == code {
-                return Some(Error::DuplicateVoxel { coord });
-            }
-            if prev > code {
-                return Some(Error::OutOfOrder { coord, code });
-            }
-        }
         p.check().map(|reason| Error::InvalidPayload { coord, reason })
     };
-    let first_bad = (0..voxels.len())
-        .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .find_first(|&i| problem(i).is_some());
-    match first_bad.and_then(problem) {
+    match (0..voxels.len()).find_map(problem) {
         Some(e) => Err(e),
         None => Ok(()),
     }
 }
 
-/// The occupied nodes one level up: distinct parents, each the prefilter of its children, with
-/// their children's mask and first index.
-fn coarsen<P: Payload>(level: &Occupied<P>) -> Occupied<P> {
-    let c = &level.codes;
-    let starts: Vec<u32> =
-        (0..c.len()).filter(|&i| i == 0 || c[i] >> 3 != c[i - 1] >> 3).map(|i| i as u32).collect();
-    let codes = starts.par_iter().with_min_len(MIN_LEN).map(|&s| c[s as usize] >> 3).collect();
-    // Exact-length outputs (an indexed unzip), not vectors grown chunk by chunk.
-    let (mut payload, mut mask) = (Vec::new(), Vec::new());
-    (0..starts.len())
+/// Payloads of an occupied level from the level below's: each node's is [`Payload::prefilter`]
+/// of its occupied children (found by first index and mask), the others counting as empty.
+fn prefilter_level<P: Payload>(level: &TopologyLevel, below: &[P]) -> Vec<P> {
+    (0..level.first.len())
         .into_par_iter()
         .with_min_len(MIN_LEN)
         .map(|g| {
-            let end = starts.get(g + 1).map_or(c.len(), |&e| e as usize);
             let mut children = [P::empty(); 8];
-            let mut mask = 0u8;
-            for i in starts[g] as usize..end {
-                children[(c[i] & 7) as usize] = level.payload[i];
-                mask |= 1 << (c[i] & 7);
+            let (mut m, mut j) = (level.mask[g], level.first[g] as usize);
+            while m != 0 {
+                children[m.trailing_zeros() as usize] = below[j];
+                j += 1;
+                m &= m - 1;
             }
-            (P::prefilter(&children), mask)
+            P::prefilter(&children)
         })
-        .unzip_into_vecs(&mut payload, &mut mask);
-    Occupied { codes, payload, mask, first: starts }
+        .collect()
 }
 
 /// `SUBSETS[m]`: bit `d` set for every `d ⊆ m` (3-bit sets).
@@ -316,17 +387,24 @@ pub(crate) fn morton_inc(code: u64, a: usize, res_log2: u32) -> Option<u64> {
 
 /// A dense level: every payload, indexed by Morton code (child pointers and masks of the
 /// finest dense level are set when the level below is built).
-fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<P>) -> Level<P> {
+fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<'_, P>) -> Level<P> {
     let n = 1usize << (3 * res_log2);
     let mut payload = vec![P::empty(); n];
-    for (&c, p) in occupied.codes.iter().zip(&occupied.payload) {
+    for (&c, p) in occupied.codes.iter().zip(occupied.payload) {
         payload[c as usize] = *p;
     }
-    Level { res_log2, dense: true, payload, child: Vec::new(), mask: Vec::new(), links: Vec::new() }
+    Level {
+        res_log2,
+        dense: true,
+        payload,
+        child: Vec::new(),
+        mask: Vec::new(),
+        tile_links: Vec::new(),
+    }
 }
 
 /// Occupied index per node of a dense level.
-fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<u32> {
     let mut occ = vec![NONE; level.payload.len()];
     for (g, &c) in occupied.codes.iter().enumerate() {
         occ[c as usize] = g as u32;
@@ -334,11 +412,11 @@ fn dense_occupancy<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
     occ
 }
 
-/// Tile parents (node indices, ascending) under a dense level: each occupied node `q` marks
+/// Per node of a dense level: whether it gets a child tile. Each occupied node `q` marks
 /// `q − d` for `d ∈ SHIFTS[mask]`.
-fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
+fn dense_tile_marks<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<bool> {
     let mut marked = vec![false; level.payload.len()];
-    for (&q, &m) in occupied.codes.iter().zip(&occupied.mask) {
+    for (&q, &m) in occupied.codes.iter().zip(occupied.mask) {
         let s = SHIFTS[m as usize];
         for d in 0..8usize {
             if s >> d & 1 == 0 {
@@ -351,118 +429,186 @@ fn dense_tile_parents<P>(level: &Level<P>, occupied: &Occupied<P>) -> Vec<u32> {
             }
         }
     }
-    (0..marked.len() as u32).filter(|&i| marked[i as usize]).collect()
+    marked
 }
 
-/// Tile parents (node indices, ascending) under a sparse level with links: node `n` is one iff
-/// a corner `n + d` (reached by forward links) is occupied with `d ∈ SHIFTS[its mask]`.
-fn sparse_tile_parents<P: Payload>(
-    level: &Level<P>,
-    occ: &[u32],
-    occupied: &Occupied<P>,
-) -> Vec<u32> {
-    let links = &level.links;
-    let hit = |i: u32, d: u32| {
-        i != NONE && {
-            let g = occ[i as usize];
-            g != NONE && SHIFTS[occupied.mask[g as usize] as usize] >> d & 1 == 1
+/// `BLOCK[x + 3y + 9z]` for a position in the 3×3×3 block of nodes starting at a tile's first
+/// node: which of the eight tiles (own, +x, +y, +xy, +z, +xz, +yz, +xyz: bit `a` for a step
+/// along axis `a`) holds it, and its index in that tile.
+const BLOCK: [(u8, u8); 27] = {
+    let mut t = [(0u8, 0u8); 27];
+    let mut p = 0;
+    while p < 27 {
+        let (x, y, z) = (p % 3, p / 3 % 3, p / 9);
+        t[p] = (
+            ((x >> 1) | (y >> 1) << 1 | (z >> 1) << 2) as u8,
+            ((x & 1) | (y & 1) << 1 | (z & 1) << 2) as u8,
+        );
+        p += 1;
+    }
+    t
+};
+
+/// `CORNER[k][d]`: the block position (`BLOCK`) of node `k + d` of a tile, `k, d ∈ {0,1}³`.
+const CORNER: [[u8; 8]; 8] = {
+    let mut t = [[0u8; 8]; 8];
+    let mut k = 0;
+    while k < 8 {
+        let mut d = 0;
+        while d < 8 {
+            let x = (k & 1) + (d & 1);
+            let y = (k >> 1 & 1) + (d >> 1 & 1);
+            let z = (k >> 2 & 1) + (d >> 2 & 1);
+            t[k][d] = (x + 3 * y + 9 * z) as u8;
+            d += 1;
         }
-    };
-    let hop = |i: u32, a: usize| if i == NONE { NONE } else { links[i as usize][a] };
-    (0..occ.len() as u32)
+        k += 1;
+    }
+    t
+};
+
+/// Per node of a sparse level whose masks and tile links are set: whether it gets a child tile,
+/// i.e. whether a corner `n + d` is occupied with `d ∈ SHIFTS[its mask]`. Per tile: the eight
+/// tiles of the 3×3×3 block of nodes at its first node are found by x-, then y-, then z-links
+/// (the tiles on a monotone path to an occupied corner exist: closure), their masks mapped
+/// through `SHIFTS`, and the 64 (node, corner) pairs read from that block.
+fn sparse_tile_marks<P>(level: &Level<P>) -> Vec<bool> {
+    let (mask, links) = (&level.mask, &level.tile_links);
+    let step =
+        |first: u32, a: usize| if first == NONE { NONE } else { links[first as usize / 8][a] };
+    let marks: Vec<[bool; 8]> = (0..links.len())
         .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .filter(|&n| {
-            if hit(n, 0) {
-                return true;
-            }
-            let [x, y, z] = links[n as usize];
-            let (xy, xz, yz) = (hop(x, 1), hop(x, 2), hop(y, 2));
-            hit(x, 1)
-                || hit(y, 2)
-                || hit(z, 4)
-                || hit(xy, 3)
-                || hit(xz, 5)
-                || hit(yz, 6)
-                || hit(hop(xy, 2), 7)
+        .with_min_len(MIN_LEN / 8)
+        .map(|t| {
+            let [x, y, z] = links[t];
+            let (xy, xz, yz) = (step(x, 1), step(x, 2), step(y, 2));
+            let tiles = [8 * t as u32, x, y, xy, z, xz, yz, step(xy, 2)];
+            let block: [u8; 27] = std::array::from_fn(|p| {
+                let (tile, j) = BLOCK[p];
+                let first = tiles[tile as usize];
+                if first == NONE { 0 } else { SHIFTS[mask[(first + j as u32) as usize] as usize] }
+            });
+            std::array::from_fn(|k| {
+                (0..8).fold(0u8, |any, d| any | block[CORNER[k][d] as usize] >> d) & 1 == 1
+            })
         })
-        .collect()
+        .collect();
+    marks.into_flattened()
+}
+
+/// The tile parents (node indices, ascending: tile `t` under `tiles[t]`) and child pointers
+/// (`8t` or [`NONE`]) of a level whose nodes `marked` get tiles. One branch-free pass.
+fn allocate_tiles(marked: &[bool]) -> (Vec<u32>, Vec<u32>) {
+    let count = marked.iter().filter(|&&m| m).count();
+    // One spare slot takes the unmarked nodes' writes.
+    let mut tiles = vec![0u32; count + 1];
+    let mut child = Vec::with_capacity(marked.len());
+    let mut rank = 0usize;
+    for (i, &m) in marked.iter().enumerate() {
+        child.push(if m { 8 * rank as u32 } else { NONE });
+        tiles[rank] = i as u32;
+        rank += m as usize;
+    }
+    tiles.truncate(count);
+    (tiles, child)
 }
 
 /// Payloads of the tiles under `tiles` (node indices of the level above, whose occupied index
 /// per node is `occ_above`), and, if `with_occupancy`, the occupied index per node of this level.
-/// Each array is written once, in parallel, without a fill pass.
+/// Per tile: its occupied children are a run of `here` starting at the parent's first child, in
+/// the order of the parent's mask bits. Each array is written once, in parallel.
 fn fill_tiles<P: Payload>(
     tiles: &[u32],
     occ_above: &[u32],
-    above: &Occupied<P>,
-    here: &Occupied<P>,
+    above: &Occupied<'_, P>,
+    here: &Occupied<'_, P>,
     with_occupancy: bool,
 ) -> (Vec<P>, Vec<u32>) {
-    // Node 8t + k is occupied iff bit k of its parent's mask is; its index in `here` is the
-    // parent's first child plus the occupied siblings before it.
-    let occupied_index = |i: usize| -> u32 {
-        let g = occ_above[tiles[i / 8] as usize];
-        if g == NONE {
-            return NONE;
+    let tile = |t: usize| -> ([P; 8], [u32; 8]) {
+        let (mut payload, mut occ) = ([P::empty(); 8], [NONE; 8]);
+        let g = occ_above[tiles[t] as usize];
+        if g != NONE {
+            let (mut m, mut j) = (above.mask[g as usize], above.first[g as usize]);
+            while m != 0 {
+                let k = m.trailing_zeros() as usize;
+                payload[k] = here.payload[j as usize];
+                occ[k] = j;
+                j += 1;
+                m &= m - 1;
+            }
         }
-        let (m, k) = (above.mask[g as usize] as u32, i % 8);
-        if m >> k & 1 == 0 {
-            NONE
-        } else {
-            above.first[g as usize] + (m & ((1 << k) - 1)).count_ones()
-        }
-    };
-    let n = 8 * tiles.len();
-    let payload_of = |j: u32| if j == NONE { P::empty() } else { here.payload[j as usize] };
-    if with_occupancy {
-        let occ: Vec<u32> =
-            (0..n).into_par_iter().with_min_len(MIN_LEN).map(occupied_index).collect();
-        let payload = occ.par_iter().with_min_len(MIN_LEN).map(|&j| payload_of(j)).collect();
         (payload, occ)
+    };
+    let par = (0..tiles.len()).into_par_iter().with_min_len(MIN_LEN / 8);
+    if with_occupancy {
+        let (mut payload, mut occ) = (Vec::new(), Vec::new());
+        par.map(tile).unzip_into_vecs(&mut payload, &mut occ);
+        (payload.into_flattened(), occ.into_flattened())
     } else {
-        let payload = (0..n)
-            .into_par_iter()
-            .with_min_len(MIN_LEN)
-            .map(|i| payload_of(occupied_index(i)))
-            .collect();
-        (payload, Vec::new())
+        let payload: Vec<[P; 8]> = par.map(|t| tile(t).0).collect();
+        (payload.into_flattened(), Vec::new())
     }
 }
 
-/// Forward links of the sparse level under `tiles` (node indices of `parent`, whose child
-/// pointers are set and, if sparse, links built).
+/// Parent tiles per rayon task of [`links`].
+const LINK_RANGE: usize = 1024;
+
+/// Tile links of the sparse level under `tiles` (node indices of `parent`, ascending, whose
+/// child pointers are set and, if sparse, tile links built): the +a neighbour of the tile under
+/// parent node `p` is the child tile of `p`'s +a neighbour. Per parent tile (8 nodes, whose
+/// child tiles are consecutive): its own 8 child pointers and those of its 3 neighbour tiles,
+/// read as 4 runs, give the links of all its child tiles. Ranges of parent tiles in parallel,
+/// each writing its own part of the output (found from `tiles`).
 fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
-    let neighbour = |p: u32, a: usize| -> u32 {
-        let q = if parent.dense {
-            morton_inc(p as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+    let child = &parent.child;
+    let n = child.len();
+    // First node of parent tile `t`'s +a neighbour tile, or NONE. A dense level of fewer than
+    // 8 nodes is the 1-node root: no neighbours.
+    let neighbour_tile = |t: usize, a: usize| -> u32 {
+        if !parent.dense {
+            parent.tile_links[t][a]
+        } else if n < 8 {
+            NONE
         } else {
-            parent.links[p as usize][a]
-        };
-        if q == NONE { NONE } else { parent.child[q as usize] }
+            // Node `8t + bit` has its a-bit set: its +a neighbour is node 0 of that tile.
+            morton_inc((8 * t + (1 << a)) as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+        }
     };
-    let tile_links: Vec<[u32; 3]> = tiles
-        .par_iter()
-        .with_min_len(MIN_LEN / 8)
-        .map(|&p| std::array::from_fn(|a| neighbour(p, a)))
-        .collect();
-    (0..8 * tiles.len())
-        .into_par_iter()
-        .with_min_len(MIN_LEN)
-        .map(|i| {
-            let (t, k) = (i / 8, (i % 8) as u32);
-            let (base, tl) = (8 * t as u32, &tile_links[t]);
-            let link = |a: usize| {
-                let bit = 1 << a;
-                if k & bit == 0 {
-                    base + (k | bit)
-                } else if tl[a] == NONE {
-                    NONE
-                } else {
-                    tl[a] + (k & !bit)
+    let mut out = vec![[0u32; 3]; tiles.len()];
+    let mut jobs = Vec::new();
+    let mut rest = &mut out[..];
+    let mut done = 0;
+    for t0 in (0..n.div_ceil(8)).step_by(LINK_RANGE) {
+        let t1 = (t0 + LINK_RANGE).min(n.div_ceil(8));
+        let end = tiles.partition_point(|&p| (p as usize) < 8 * t1);
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(end - done);
+        (rest, done) = (tail, end);
+        jobs.push((t0, t1, part));
+    }
+    jobs.into_par_iter().for_each(|(t0, t1, part)| {
+        let mut w = 0;
+        for t in t0..t1 {
+            let own: [u32; 8] =
+                std::array::from_fn(|k| child.get(8 * t + k).copied().unwrap_or(NONE));
+            if own == [NONE; 8] {
+                continue;
+            }
+            let near: [[u32; 8]; 3] = std::array::from_fn(|a| {
+                let f = neighbour_tile(t, a);
+                if f == NONE { [NONE; 8] } else { std::array::from_fn(|k| child[f as usize + k]) }
+            });
+            for (k, &c) in own.iter().enumerate() {
+                if c == NONE {
+                    continue;
                 }
-            };
-            [link(0), link(1), link(2)]
-        })
-        .collect()
+                part[w] = std::array::from_fn(|a| {
+                    let bit = 1 << a;
+                    if k & bit == 0 { own[k | bit] } else { near[a][k & !bit] }
+                });
+                w += 1;
+            }
+        }
+        debug_assert_eq!(w, part.len());
+    });
+    out
 }

@@ -71,6 +71,15 @@ pub enum Error {
         /// What is wrong with its payload.
         reason: &'static str,
     },
+    /// [`crate::Octree::from_topology`] was given a different number of payloads than the
+    /// topology has voxels.
+    #[error("{payloads} payloads given for a topology of {voxels} voxels")]
+    PayloadCount {
+        /// Voxels in the topology.
+        voxels: u64,
+        /// Payloads given.
+        payloads: u64,
+    },
     /// A level would hold more nodes than a `u32` node index addresses.
     #[error("level {level} would hold {nodes} nodes, more than 32-bit node indices address")]
     TooManyNodes {

@@ -5,11 +5,18 @@
 //! # Layout
 //! All levels are concatenated, root first (level `depth` … level 0), so that a storage buffer
 //! holds the whole tree. Node `i` of level `l` is global node `levels[l].first + i`; every index
-//! stored in a [`GpuNode`] is global, [`NONE`] meaning none. Dense levels keep their Morton
-//! indexing (`first + morton(c)`); their links are [`NONE`] (a neighbour is an index
-//! computation) and only the finest dense level has child pointers. The WGSL mirror is
-//! `struct GpuNode { child: u32, links: array<u32, 3>, mask: u32 }` (20 bytes, stride 20) and
-//! `struct GpuLevel { first: u32, count: u32, res_log2: u32, dense: u32 }`.
+//! stored in a [`GpuNode`] or [`GpuTile`] is global, [`NONE`] meaning none. Dense levels keep
+//! their Morton indexing (`first + morton(c)`); they have no tiles (a neighbour is an index
+//! computation) and only the finest dense level has child pointers. The sparse levels' 2×2×2
+//! tiles are concatenated the same way in `tiles`: tile `t` of level `l` (its nodes `8t..8t + 8`
+//! local) is `tiles[levels[l].first_tile + t]`, and holds the global index of the first node of
+//! its +x, +y, +z neighbour tile. A node's neighbour follows as on the CPU
+//! ([`crate::LevelView::neighbour`], [`FlatOctree::neighbour`]): local index `i`, axis bit `b`:
+//! `first + (i | b)` if `i & b == 0`, else `links[a] + (i & 7 & !b)` of its tile. The WGSL
+//! mirror is `struct GpuNode { child: u32, mask: u32 }` (8 bytes),
+//! `struct GpuTile { links: array<u32, 3> }` (12 bytes) and
+//! `struct GpuLevel { first: u32, count: u32, res_log2: u32, dense: u32, first_tile: u32 }`
+//! (20 bytes).
 //!
 //! # The lock-free build (seed 002's Algorithm 1 without its spin lock)
 //! WGSL has relaxed atomics only and no forward-progress guarantee, so the paper's top-down
@@ -23,7 +30,8 @@
 //! 2. **allocate**: an exclusive prefix sum over the parent level's flags gives each flagged
 //!    parent its tile `8·rank`: tiles in parent order, hence in Morton order, with no atomics on a
 //!    shared allocator and a deterministic result.
-//! 3. **link**: one thread per node of level `l`, the reference rule (`build` module step 5).
+//! 3. **link**: one thread per tile of level `l`: its +a neighbour tile is the child tile of its
+//!    parent's +a neighbour (the reference rule, `build` module docs).
 //!
 //! Payloads then go bottom-up: leaves scattered by descent, one thread per parent prefiltering
 //! its tile. The emulation runs each step as a rayon pass with `AtomicU32` relaxed operations,
@@ -39,20 +47,27 @@ use crate::octree::{NONE, Octree};
 use crate::payload::Payload;
 use crate::{BuildOptions, Error, Result};
 
-/// One node's topology: child tile, +x/+y/+z neighbours (global indices or [`NONE`]) and the
-/// occupied-children mask (low 8 bits). `#[repr(C)]`, 20 bytes, no padding.
+/// One node's topology: child tile (global index or [`NONE`]) and the occupied-children mask
+/// (low 8 bits). `#[repr(C)]`, 8 bytes, no padding.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuNode {
     /// Global index of the first node of the child tile, or [`NONE`].
     pub child: u32,
-    /// Global index of the +x, +y, +z neighbour at the same level, or [`NONE`].
-    pub links: [u32; 3],
     /// Bit `k`: child `k`'s subtree holds an input voxel.
     pub mask: u32,
 }
 
-/// Where a level's nodes are in the flat arrays. `#[repr(C)]`, 16 bytes.
+/// One 2×2×2 tile of a sparse level: the global index of the first node of its +x, +y, +z
+/// neighbour tile at the same level, or [`NONE`]. `#[repr(C)]`, 12 bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuTile {
+    /// +x, +y, +z neighbour tiles.
+    pub links: [u32; 3],
+}
+
+/// Where a level's nodes and tiles are in the flat arrays. `#[repr(C)]`, 20 bytes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuLevel {
@@ -64,10 +79,13 @@ pub struct GpuLevel {
     pub res_log2: u32,
     /// 1 if stored densely (Morton-indexed), 0 if in sparse tiles.
     pub dense: u32,
+    /// Index in [`FlatOctree::tiles`] of the level's first tile (sparse levels; for dense
+    /// levels, which have none, where the next sparse level's tiles start).
+    pub first_tile: u32,
 }
 
 /// The flat layout (module docs): `levels[l]` for level `l` (0 = leaves), nodes of all levels
-/// root first, one payload per node.
+/// root first, one payload per node, tiles of the sparse levels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlatOctree<P> {
     /// Levels below the root.
@@ -78,56 +96,83 @@ pub struct FlatOctree<P> {
     pub nodes: Vec<GpuNode>,
     /// Payload of every node, same indices.
     pub payload: Vec<P>,
+    /// Neighbour links of every tile of the sparse levels, level `depth − 1` … 0.
+    pub tiles: Vec<GpuTile>,
 }
 
 fn global(first: u32, local: u32) -> u32 {
     if local == NONE { NONE } else { first + local }
 }
 
-/// The level table and node count for a tree whose level `l` holds `counts[l]` nodes.
-fn level_table(counts: &[usize], first_dense: u32) -> Result<(Vec<GpuLevel>, usize)> {
+/// The level table, node count and tile count for a tree whose level `l` holds `counts[l]`
+/// nodes.
+fn level_table(counts: &[usize], first_dense: u32) -> Result<(Vec<GpuLevel>, usize, usize)> {
     let depth = counts.len() as u32 - 1;
     let mut levels = vec![GpuLevel::default(); counts.len()];
-    let mut next = 0u64;
+    let (mut next, mut tiles) = (0u64, 0u64);
     for l in (0..=depth).rev() {
         let count = counts[l as usize] as u64;
         if next + count >= NONE as u64 {
             return Err(Error::TooManyNodes { level: l, nodes: next + count });
         }
+        let dense = l >= first_dense;
         levels[l as usize] = GpuLevel {
             first: next as u32,
             count: count as u32,
             res_log2: depth - l,
-            dense: (l >= first_dense) as u32,
+            dense: dense as u32,
+            first_tile: tiles as u32,
         };
         next += count;
+        if !dense {
+            tiles += count / 8;
+        }
     }
-    Ok((levels, next as usize))
+    Ok((levels, next as usize, tiles as usize))
 }
 
 impl<P: Payload> FlatOctree<P> {
     /// The flat layout of a reference-built octree.
     pub fn from_octree(tree: &Octree<P>) -> Result<Self> {
         let counts: Vec<usize> = tree.levels.iter().map(|l| l.payload.len()).collect();
-        let (levels, total) = level_table(&counts, tree.first_dense)?;
-        let mut nodes = vec![GpuNode { child: NONE, links: [NONE; 3], mask: 0 }; total];
+        let (levels, total, tile_count) = level_table(&counts, tree.first_dense)?;
+        let mut nodes = vec![GpuNode { child: NONE, mask: 0 }; total];
         let mut payload = vec![P::empty(); total];
+        let mut tiles = vec![GpuTile { links: [NONE; 3] }; tile_count];
         for (l, lv) in tree.levels.iter().enumerate() {
             let first = levels[l].first as usize;
             payload[first..first + lv.payload.len()].copy_from_slice(&lv.payload);
             let below = if l > 0 { levels[l - 1].first } else { 0 };
-            for i in 0..lv.payload.len() {
-                let n = &mut nodes[first + i];
-                if let Some(&c) = lv.child.get(i) {
-                    n.child = global(below, c);
-                    n.mask = lv.mask[i] as u32;
-                }
-                if let Some(links) = lv.links.get(i) {
-                    n.links = links.map(|x| global(first as u32, x));
-                }
+            for (i, (&c, &m)) in lv.child.iter().zip(&lv.mask).enumerate() {
+                nodes[first + i] = GpuNode { child: global(below, c), mask: m as u32 };
+            }
+            let ft = levels[l].first_tile as usize;
+            for (t, links) in lv.tile_links.iter().enumerate() {
+                tiles[ft + t].links = links.map(|x| global(first as u32, x));
             }
         }
-        Ok(Self { depth: tree.depth, levels, nodes, payload })
+        Ok(Self { depth: tree.depth, levels, nodes, payload, tiles })
+    }
+
+    /// Global index of the node one step along `axis` (0: +x, 1: +y, 2: +z) from global node
+    /// `node` of `level` (module docs for the rule), or `None` if that node does not exist,
+    /// `node` is not a node of `level`, or `axis > 2`. What a kernel computes.
+    pub fn neighbour(&self, level: u32, node: u32, axis: usize) -> Option<u32> {
+        let lv = self.levels.get(level as usize)?;
+        let local = node.checked_sub(lv.first).filter(|&i| i < lv.count)?;
+        if axis > 2 {
+            return None;
+        }
+        if lv.dense == 1 {
+            let next = crate::build::morton_inc(local as u64, axis, lv.res_log2)?;
+            return Some(lv.first + next as u32);
+        }
+        let bit = 1u32 << axis;
+        if local & bit == 0 {
+            return Some(lv.first + (local | bit));
+        }
+        let t = self.tiles.get((lv.first_tile + local / 8) as usize)?.links[axis];
+        (t != NONE).then(|| t + (local & 7 & !bit))
     }
 
     /// The lock-free level-by-level build (module docs), emulated on the CPU, from voxels in any
@@ -156,7 +201,8 @@ impl<P: Payload> FlatOctree<P> {
         }
         let coords: Vec<UVec3> = voxels.iter().map(|v| v.0).collect();
 
-        // Per level: child pointers and masks (levels 1..=first_dense), links (sparse levels).
+        // Per level: child pointers and masks (levels 1..=first_dense), tile links (sparse
+        // levels, local indices).
         let mut child: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
         let mut mask: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
         let mut links: Vec<Vec<[u32; 3]>> = vec![Vec::new(); depth as usize + 1];
@@ -207,25 +253,28 @@ impl<P: Payload> FlatOctree<P> {
             }
             let parent_res = 1u32 << (depth - l as u32 - 1);
             let parent_dense = l + 1 >= fd;
-            links[l] = (0..counts[l])
-                .into_par_iter()
-                .map(|i| {
-                    let (t, k) = (i / 8, (i % 8) as u32);
-                    let p = tile_parent[t];
+            // One thread per tile: the child tile of the parent's +a neighbour (a node of the
+            // parent level: by coordinates on a dense level, from the parent's tile links on a
+            // sparse one).
+            links[l] = tile_parent
+                .par_iter()
+                .map(|&p| {
                     std::array::from_fn(|a| {
-                        let bit = 1 << a;
-                        if k & bit == 0 {
-                            return (8 * t) as u32 + (k | bit);
-                        }
                         let q = if parent_dense {
                             let mut c = morton::decode(p as u64);
                             c[a] += 1;
                             if c[a] < parent_res { morton::encode(c) as u32 } else { NONE }
                         } else {
-                            parent_links[p as usize][a]
+                            let bit = 1u32 << a;
+                            if p & bit == 0 {
+                                p | bit
+                            } else {
+                                let t = parent_links[p as usize / 8][a];
+                                if t == NONE { NONE } else { t + (p & 7 & !bit) }
+                            }
                         };
                         match parent_child.get(q as usize) {
-                            Some(&ch) if ch != NONE => ch + (k & !bit),
+                            Some(&ch) if ch != NONE => ch,
                             _ => NONE,
                         }
                     })
@@ -255,25 +304,23 @@ impl<P: Payload> FlatOctree<P> {
             });
         }
 
-        let (levels, total) = level_table(&counts, first_dense)?;
-        let mut nodes = vec![GpuNode { child: NONE, links: [NONE; 3], mask: 0 }; total];
+        let (levels, total, tile_count) = level_table(&counts, first_dense)?;
+        let mut nodes = vec![GpuNode { child: NONE, mask: 0 }; total];
         let mut payload = vec![P::empty(); total];
+        let mut tiles = vec![GpuTile { links: [NONE; 3] }; tile_count];
         for l in 0..=depth as usize {
             let first = levels[l].first as usize;
             let below = if l > 0 { levels[l - 1].first } else { 0 };
             payload[first..first + counts[l]].copy_from_slice(&pay[l]);
-            for i in 0..counts[l] {
-                let n = &mut nodes[first + i];
-                if let Some(&c) = child[l].get(i) {
-                    n.child = global(below, c);
-                    n.mask = mask[l][i];
-                }
-                if let Some(x) = links[l].get(i) {
-                    n.links = x.map(|x| global(first as u32, x));
-                }
+            for (i, &c) in child[l].iter().enumerate() {
+                nodes[first + i] = GpuNode { child: global(below, c), mask: mask[l][i] };
+            }
+            let ft = levels[l].first_tile as usize;
+            for (t, x) in links[l].iter().enumerate() {
+                tiles[ft + t].links = x.map(|x| global(first as u32, x));
             }
         }
-        Ok(Self { depth, levels, nodes, payload })
+        Ok(Self { depth, levels, nodes, payload, tiles })
     }
 }
 
@@ -305,10 +352,11 @@ mod tests {
 
     #[test]
     fn gpu_structs_have_the_documented_layout() {
-        assert_eq!(size_of::<GpuNode>(), 20);
-        assert_eq!(std::mem::offset_of!(GpuNode, links), 4);
-        assert_eq!(std::mem::offset_of!(GpuNode, mask), 16);
-        assert_eq!(size_of::<GpuLevel>(), 16);
+        assert_eq!(size_of::<GpuNode>(), 8);
+        assert_eq!(std::mem::offset_of!(GpuNode, mask), 4);
+        assert_eq!(size_of::<GpuTile>(), 12);
+        assert_eq!(size_of::<GpuLevel>(), 20);
+        assert_eq!(std::mem::offset_of!(GpuLevel, first_tile), 16);
         assert_eq!(size_of::<AveragePayload>(), 28);
     }
 
@@ -356,6 +404,19 @@ mod tests {
             let emulated = FlatOctree::build_level_by_level(grid, &rev, &opts).unwrap();
             assert_eq!(emulated.levels, reference.levels, "{dims}");
             assert_eq!(emulated.nodes, reference.nodes, "{dims}");
+            assert_eq!(emulated.tiles, reference.tiles, "{dims}");
+            // The flat neighbour rule answers what the octree's does, for every node.
+            let tree = Octree::build(grid, voxels.clone(), &opts).unwrap();
+            for (l, lv) in emulated.levels.iter().enumerate() {
+                let view = tree.level(l as u32);
+                for i in 0..lv.count {
+                    for a in 0..3 {
+                        let want = view.neighbour(i, a).map(|n| lv.first + n);
+                        assert_eq!(emulated.neighbour(l as u32, lv.first + i, a), want);
+                    }
+                }
+                assert_eq!(emulated.neighbour(l as u32, lv.first + lv.count, 0), None);
+            }
             for (i, (a, b)) in emulated.payload.iter().zip(&reference.payload).enumerate() {
                 assert!(a.max_abs_diff(b) <= 1e-6, "node {i}: {a:?} vs {b:?}");
             }

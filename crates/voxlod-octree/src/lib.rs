@@ -8,7 +8,8 @@
 //! |---|---|
 //! | [`payload`] | the [`Payload`] trait (how eight children combine) and its Averages, SGGX and six-directional-opacity implementations |
 //! | [`octree`] | the [`Octree`] layout, [`BuildOptions`], which nodes exist and why |
-//! | `build` | the CPU reference build ([`Octree::build`], [`Octree::from_brick_map`]) |
+//! | [`topology`] | [`Topology`]: the occupied levels and their child structure alone, the first step of the build |
+//! | `build` | the CPU reference build ([`Octree::build`], [`Octree::from_brick_map`], [`Octree::from_topology`]) |
 //! | `sample` | [`Octree::sample`] (position + footprint diameter), [`Octree::sample_level`] |
 //! | `validate` | [`Octree::validate`]: every structural invariant |
 //! | [`stats`] | [`MemoryStats`]: nodes per level, bytes by role, bytes per voxel |
@@ -53,13 +54,15 @@ pub mod octree;
 pub mod payload;
 mod sample;
 pub mod stats;
+pub mod topology;
 mod validate;
 
 pub use error::{Error, Result};
-pub use flat::{FlatOctree, GpuLevel, GpuNode};
+pub use flat::{FlatOctree, GpuLevel, GpuNode, GpuTile};
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 pub use payload::{AveragePayload, DIRECTIONS, Directional, Payload, SggxPayload};
 pub use stats::{LevelStats, MemoryStats};
+pub use topology::Topology;
 pub use validate::PREFILTER_TOLERANCE;
 
 #[cfg(test)]

@@ -13,12 +13,13 @@
 //! - A non-finite position samples empty space.
 //!
 //! Cost: per level, one descent from the finest dense level (`first_dense − l` child reads) and
-//! at most 7 link reads; no allocation. Dense levels are read by index.
+//! at most 7 neighbour steps (a tile-link read only when the step leaves the
+//! node's tile); no allocation. Dense levels are read by index.
 
 use glam::{DVec3, IVec3, UVec3, Vec3};
 use voxlod_format::morton;
 
-use crate::octree::{NONE, Octree};
+use crate::octree::{NONE, Octree, sparse_neighbour};
 use crate::payload::Payload;
 
 impl<P: Payload> Octree<P> {
@@ -109,7 +110,9 @@ impl<P: Payload> Octree<P> {
         }
         let mut n = [NONE; 8];
         n[0] = self.find(level, start);
-        let hop = |i: u32, axis: usize| if i == NONE { NONE } else { lv.links[i as usize][axis] };
+        let links = &lv.tile_links;
+        let hop =
+            |i: u32, axis: usize| if i == NONE { NONE } else { sparse_neighbour(links, i, axis) };
         n[1] = hop(n[0], 0);
         n[2] = hop(n[0], 1);
         n[4] = hop(n[0], 2);

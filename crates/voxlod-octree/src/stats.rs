@@ -3,12 +3,12 @@
 //! # What the neighbour links cost, against ESVO's anchor
 //! ESVO (Laine & Karras 2010) spends about 1 byte of topology per voxel: one 32-bit child
 //! descriptor per parent, children stored only where occupied. This layout spends, per node of a
-//! sparse level, 5 bytes of topology above level 0 (`child: u32`, `mask: u8`) and **12 bytes of
-//! forward links on every sparse level, leaves included** (`[u32; 3]`), on the occupied nodes
-//! *and* on the nodes the backward closure and the 2×2×2 tiles add (`octree` module docs),
-//! which on surfaces are several times the occupied ones. [`MemoryStats`] measures each part;
-//! the crate README gives the figures for a sphere shell (`benches/build.rs`): 5.3 B/voxel of
-//! topology and 60.9 B/voxel of links.
+//! sparse level, 5 bytes of topology above level 0 (`child: u32`, `mask: u8`), and **12 bytes
+//! of forward links per 2×2×2 tile of every sparse level, leaves included** (`[u32; 3]`, 1.5
+//! bytes per node), on the occupied nodes *and* on the nodes the backward closure and the tiles
+//! add (`octree` module docs), which on surfaces are several times the occupied ones.
+//! [`MemoryStats`] measures each part; the crate README gives the figures for a sphere shell
+//! (`benches/build.rs`). [`crate::Topology::memory_bytes`] gives the occupied levels alone.
 
 use crate::octree::Octree;
 use crate::payload::Payload;
@@ -85,7 +85,7 @@ impl<P: Payload> Octree<P> {
             } else {
                 s.payload_bytes += payload;
                 s.topology_bytes += topology;
-                s.link_bytes += (lv.links.len() * size_of::<[u32; 3]>()) as u64;
+                s.link_bytes += (lv.tile_links.len() * size_of::<[u32; 3]>()) as u64;
             }
             let occupied = if l == 0 {
                 self.voxels

@@ -12,12 +12,12 @@ use voxlod_format::GridSpec;
 
 use crate::{AveragePayload, BuildOptions, Octree};
 
-fn grid(dims: UVec3) -> GridSpec {
+pub(crate) fn grid(dims: UVec3) -> GridSpec {
     GridSpec::new(DVec3::ZERO, 1.0, dims).expect("a valid grid")
 }
 
 /// A deterministic payload for voxel `c` (distinct colours, normals and opacities).
-fn payload_of(c: UVec3) -> AveragePayload {
+pub(crate) fn payload_of(c: UVec3) -> AveragePayload {
     let h = |k: u32| {
         let x = (c.x.wrapping_mul(73_856_093) ^ c.y.wrapping_mul(19_349_663))
             ^ c.z.wrapping_mul(83_492_791)

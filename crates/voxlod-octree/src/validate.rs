@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use glam::UVec3;
 use voxlod_format::morton;
 
-use crate::octree::{Level, NONE, Octree};
+use crate::octree::{Level, NONE, Octree, sparse_neighbour};
 use crate::payload::Payload;
 use crate::{Error, Result};
 
@@ -31,8 +31,9 @@ impl<P: Payload> Octree<P> {
     ///   occupied hold [`Payload::empty`];
     /// - closure: every backward neighbour (`−{0,1}³`, inside the cube) of an occupied node of a
     ///   sparse level exists;
-    /// - links: each +x, +y, +z link is the node one step along that axis, and is [`NONE`]
-    ///   exactly when that node does not exist;
+    /// - links: one per tile, each [`NONE`] or the first node of a tile of the level; every
+    ///   node's +x, +y, +z neighbour derived from them ([`crate::LevelView::neighbour`]) is the
+    ///   node one step along that axis, and is absent exactly when that node does not exist;
     /// - payloads: finite, and every parent equals [`Payload::prefilter`] of its children within
     ///   [`PREFILTER_TOLERANCE`].
     pub fn validate(&self) -> Result<()> {
@@ -91,10 +92,20 @@ impl<P: Payload> Octree<P> {
         if lv.dense && n != full {
             return fail(l, 0, format!("dense level holds {n} of {full} nodes"));
         }
-        if !lv.dense && (!n.is_multiple_of(8) || lv.links.len() != n) {
-            return fail(l, 0, format!("{n} nodes (tiles of 8), {} links", lv.links.len()));
+        let tiles = lv.tile_links.len();
+        if !lv.dense && (!n.is_multiple_of(8) || tiles != n / 8) {
+            return fail(l, 0, format!("{n} nodes (tiles of 8), {tiles} tile links"));
         }
-        if lv.dense && !lv.links.is_empty() {
+        if !lv.dense {
+            for (t, links) in lv.tile_links.iter().enumerate() {
+                if let Some(&x) =
+                    links.iter().find(|&&x| x != NONE && (x % 8 != 0 || x as usize >= n))
+                {
+                    return fail(l, 8 * t, format!("tile link {x} is not the start of a tile"));
+                }
+            }
+        }
+        if lv.dense && !lv.tile_links.is_empty() {
             return fail(l, 0, "a dense level stores links".into());
         }
         let has_children = l > 0 && l <= fd;
@@ -206,8 +217,8 @@ impl<P: Payload> Octree<P> {
                 let mut n = c;
                 n[a] += 1;
                 let expected = at(n);
-                if lv.links[i][a] != expected {
-                    let got = lv.links[i][a];
+                let got = sparse_neighbour(&lv.tile_links, i as u32, a);
+                if got != expected {
                     return fail(l, i, format!("link {a} is {got}, the node at {n} is {expected}"));
                 }
             }

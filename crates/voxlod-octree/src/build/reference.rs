@@ -21,12 +21,17 @@ struct Occupied<P> {
     shifts: Vec<u8>,
 }
 
-/// The reference build of [`Octree::from_morton_sorted`] (same checks, same output).
+/// Per level, the +x, +y, +z neighbour of every node (empty for dense levels).
+pub(crate) type NodeLinks = Vec<Vec<[u32; 3]>>;
+
+/// The reference build of [`Octree::from_morton_sorted`] (same checks, same output), and the
+/// per-node links (+x, +y, +z neighbour of every node of each sparse level) it derives the tile
+/// links from.
 pub(crate) fn from_morton_sorted<P: Payload>(
     grid: GridSpec,
     voxels: Vec<(u64, P)>,
     options: &BuildOptions,
-) -> Result<Octree<P>> {
+) -> Result<(Octree<P>, NodeLinks)> {
     grid.validate()?;
     let (depth, first_dense) = plan(grid.dims, options)?;
     check_input(grid.dims, &voxels)?;
@@ -61,21 +66,25 @@ pub(crate) fn from_morton_sorted<P: Payload>(
             }
         })
         .collect();
+    let mut node_links = vec![Vec::new(); levels.len()];
     for l in (0..first_dense as usize).rev() {
         let (lower, upper) = levels.split_at_mut(l + 1);
-        lower[l].links = links(&lower[l], &upper[0]);
+        node_links[l] = links(&lower[l], &upper[0], &node_links[l + 1]);
+        // Tile t's +a neighbour tile starts at the +a link of its node with only the a-bit set.
+        lower[l].tile_links = (0..node_links[l].len() / 8)
+            .map(|t| std::array::from_fn(|a| node_links[l][8 * t + (1 << a)][a]))
+            .collect();
     }
     for level in &mut levels {
         level.payload.shrink_to_fit();
         level.child.shrink_to_fit();
         level.mask.shrink_to_fit();
-        level.links.shrink_to_fit();
     }
     let tree = Octree { grid, depth, first_dense, voxels: voxel_count, levels };
     if cfg!(debug_assertions) {
         tree.validate()?;
     }
-    Ok(tree)
+    Ok((tree, node_links))
 }
 
 /// The occupied nodes one level up: distinct parents, each the prefilter of its children.
@@ -176,7 +185,7 @@ fn dense_level<P: Payload>(
             mask[(c >> 3) as usize] |= 1 << (c & 7);
         }
     }
-    Level { res_log2, dense: true, payload, child, mask, links: Vec::new() }
+    Level { res_log2, dense: true, payload, child, mask, tile_links: Vec::new() }
 }
 
 /// A sparse level made of the tiles of `tiles` (parents' codes); `below` as for
@@ -204,11 +213,16 @@ fn sparse_level<P: Payload>(
             mask[i] |= 1 << (c & 7);
         }
     }
-    Level { res_log2, dense: false, payload, child, mask, links: Vec::new() }
+    Level { res_log2, dense: false, payload, child, mask, tile_links: Vec::new() }
 }
 
-/// Forward links of a sparse level from its parent level (links already built if sparse).
-fn links<P: Payload>(level: &Level<P>, parent: &Level<P>) -> Vec<[u32; 3]> {
+/// Forward links of a sparse level from its parent level (`parent_links`, the parent's per-node
+/// links, already built if sparse).
+fn links<P: Payload>(
+    level: &Level<P>,
+    parent: &Level<P>,
+    parent_links: &[[u32; 3]],
+) -> Vec<[u32; 3]> {
     let mut tile_parent = vec![NONE; level.payload.len() / 8];
     for (p, &c) in parent.child.iter().enumerate() {
         if c != NONE {
@@ -231,7 +245,7 @@ fn links<P: Payload>(level: &Level<P>, parent: &Level<P>) -> Vec<[u32; 3]> {
                     c[a] += 1;
                     if c[a] < parent_res { morton::encode(c) as u32 } else { NONE }
                 } else {
-                    parent.links[p as usize][a]
+                    parent_links[p as usize][a]
                 };
                 match parent.child.get(q as usize) {
                     Some(&ch) if ch != NONE => ch + (k & !bit),

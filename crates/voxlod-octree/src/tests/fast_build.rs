@@ -8,6 +8,7 @@ use voxlod_format::morton;
 
 use super::{grid, payload_of};
 use crate::build::reference;
+use crate::octree::NONE;
 use crate::{AveragePayload, BuildOptions, Octree};
 
 fn sorted(coords: &[UVec3]) -> Vec<(u64, AveragePayload)> {
@@ -23,7 +24,7 @@ fn assert_same_build(dims: UVec3, coords: &[UVec3], options: &BuildOptions) {
     let voxels = sorted(coords);
     let fast = Octree::from_morton_sorted(grid(dims), voxels.clone(), options);
     let slow = reference::from_morton_sorted(grid(dims), voxels, options);
-    let (fast, slow) = match (fast, slow) {
+    let (fast, (slow, node_links)) = match (fast, slow) {
         (Ok(f), Ok(s)) => (f, s),
         (f, s) => {
             assert_eq!(f.err().map(|e| e.to_string()), s.err().map(|e| e.to_string()));
@@ -40,7 +41,14 @@ fn assert_same_build(dims: UVec3, coords: &[UVec3], options: &BuildOptions) {
         assert_eq!((f.res_log2, f.dense), (s.res_log2, s.dense), "{what}");
         assert_eq!(f.child, s.child, "child pointers, {what}");
         assert_eq!(f.mask, s.mask, "masks, {what}");
-        assert_eq!(f.links, s.links, "links, {what}");
+        assert_eq!(f.tile_links, s.tile_links, "tile links, {what}");
+        // Every node's neighbour from the tile links against the reference's per-node links.
+        let view = fast.level(l as u32);
+        for (i, want) in node_links[l].iter().enumerate() {
+            let got = [0, 1, 2].map(|a| view.neighbour(i as u32, a).unwrap_or(NONE));
+            assert_eq!(&got, want, "node {i}, {what}");
+        }
+        assert_eq!(node_links[l].len(), if f.dense { 0 } else { f.payload.len() }, "{what}");
         assert!(f.payload == s.payload, "payloads, {what}");
     }
     fast.validate().unwrap();

@@ -86,9 +86,13 @@ fn a_mask_without_children_is_found() {
 #[test]
 fn a_wrong_link_is_found() {
     let mut t = tree();
-    let i = t.levels[0].links.iter().position(|l| l[1] != NONE).unwrap();
-    t.levels[0].links[i][1] = NONE;
+    let t0 = t.levels[0].tile_links.iter().position(|l| l[1] != NONE).unwrap();
+    t.levels[0].tile_links[t0][1] = NONE;
+    // Node k = 2 (+y bit set) of that tile now has no +y neighbour.
     expect_broken(&t, 0, "link 1 is");
+    let mut t = tree();
+    t.levels[0].tile_links[t0][2] = 3;
+    expect_broken(&t, 0, "tile link 3 is not the start of a tile");
 }
 
 #[test]
@@ -168,8 +172,8 @@ fn a_missing_closure_node_is_found() {
     }
     let leaves = &mut t.levels[0];
     leaves.payload.drain(start as usize..start as usize + 8);
-    leaves.links.drain(start as usize..start as usize + 8);
-    for link in leaves.links.iter_mut().flatten() {
+    leaves.tile_links.remove(start as usize / 8);
+    for link in leaves.tile_links.iter_mut().flatten() {
         if *link != NONE && *link >= start {
             *link = if *link < start + 8 { NONE } else { *link - 8 };
         }
