@@ -22,7 +22,9 @@
 //! does (`normal_for`: the largest `|dir|` among the axes crossed), the first voxel stops the
 //! ray and is shaded at its entry point, and its shadow ray is the filtered one over records of
 //! opacity 1 (the transmittance drops to 0 at the first counted voxel: the CPU's "blocked").
-//! The virtual-mesh and Adaptive records are not ported yet.
+//! Virtual-mesh and Adaptive grids (record kinds 3 and 4, [`FilteredKernel::upload_virtual_mesh`],
+//! [`FilteredKernel::upload_adaptive`], rendered by the same [`FilteredKernel::render`]) run as
+//! per-voxel passes: see [`voxels`].
 //!
 //! # Use
 //! ```no_run
@@ -38,8 +40,8 @@
 //! ```
 //! `voxlod compare --backend gpu` calls it in place of [`voxlod_cpu::render::filtered::render`]
 //! and [`voxlod_cpu::render::baseline::render`] (same inputs, same image up to the stated
-//! bound) for its baseline, Averages and \[VJK21\] rows, and renders the virtual-mesh and
-//! Adaptive rows on the CPU; every row says which backend rendered it. `voxlod render` renders
+//! bound) for every row: baseline, Averages, \[VJK21\], virtual mesh and Adaptive; every row
+//! says which backend rendered it. `voxlod render` renders
 //! the ground truth only, not voxel representations.
 //!
 //! # No per-frame cache: why evaluating per hit gives the CPU's cached values
