@@ -3,7 +3,8 @@
 //! **Adaptive** grid mixing Averages, \[VJK21\] and virtual-mesh voxels, on the bunny at 40³
 //! (records fitted from 32 lines per voxel; the Adaptive errors from 64 held-out lines), 48×48
 //! pixels: the cases of [`crate::filtered`] (directional light with shadows on and off, a
-//! point light with shadows) plus the Circles and projected-area variants with shadows, and
+//! point light with shadows) plus the Circles, projected-area and specular variants with
+//! shadows, and
 //! random cameras, lights, shadows and variants.
 //!
 //! - **CPU reference row**: the cached render equals `render_uncached` bit for bit (the GPU's
@@ -38,7 +39,7 @@ use voxlod_cpu::appearance::vmesh::{self, VirtualMeshGrid};
 use voxlod_cpu::appearance::{Appearance, AppearanceGrid};
 use voxlod_cpu::render::filtered::{FrameCache, Options, render, render_uncached};
 use voxlod_cpu::voxelize::{self, voxelize};
-use voxlod_format::records::VirtualMeshRecord;
+use voxlod_format::records::{SpecularRecord, VirtualMeshRecord};
 use voxlod_gpu::filtered::voxels::MAX_SAMPLES_PER_FACE;
 use voxlod_gpu::filtered::{FilteredKernel, GpuRecords};
 use voxlod_scene::{Camera, Image, Light, Scene};
@@ -53,16 +54,18 @@ pub const GPU_BOUND: ImageBound = ImageBound { per_pixel: 2, fraction: 0.99 };
 /// The Adaptive threshold of the fixture (chosen so that every kind holds a share).
 const THRESHOLD: f32 = 0.08;
 
-/// The virtual-mesh variants: Lines, Circles, Lines × projected area.
-const VARIANTS: [(&str, DirectionalRule, bool); 3] = [
+/// The virtual-mesh variants: Lines, Circles, Lines × projected area, and Lines with a
+/// specular side record on every voxel (the bunny has none: this exercises the specular lobe).
+const VARIANTS: [(&str, DirectionalRule, bool); 4] = [
     ("lines", DirectionalRule::Lines, false),
     ("circles", DirectionalRule::Circles, false),
     ("lines-area", DirectionalRule::Lines, true),
+    ("lines-specular", DirectionalRule::Lines, false),
 ];
 
 struct Fixture {
     scene: Scene,
-    vmesh: [VirtualMeshGrid; 3],
+    vmesh: [VirtualMeshGrid; 4],
     adaptive: AdaptiveGrid,
 }
 
@@ -79,11 +82,13 @@ fn fixture() -> &'static Fixture {
         let opts = PrecomputeOptions { rays: 32, seed: 0 };
         let records: AppearanceGrid<VirtualMeshRecord> =
             precompute(&ctx, &opts, vmesh::fit).expect("virtual mesh");
-        let vmesh = VARIANTS.map(|(_, rule, projected_area)| VirtualMeshGrid {
+        let mut vmesh = VARIANTS.map(|(_, rule, projected_area)| VirtualMeshGrid {
             rule,
             projected_area,
             ..VirtualMeshGrid::new(records.clone())
         });
+        let n = records.records.len();
+        vmesh[3].grid.specular = Some(vec![SpecularRecord::new(0.4, 24.0); n]);
         let options = AdaptiveOptions { rays: 32, heldout: 64, ..Default::default() };
         let candidates = Candidates::build(&ctx, &options).expect("Adaptive candidates");
         let adaptive = candidates.select(THRESHOLD).expect("an Adaptive grid");
@@ -144,7 +149,7 @@ pub fn vmesh_scenes(backend: &Backend) -> Result<Measure, String> {
     let mut runs: Vec<(Grid, &'static str, Camera, Light, Options)> =
         cases().into_iter().map(|(n, c, l, o)| (Grid::Vmesh(0), n, c, l, o)).collect();
     let (_, camera, sun, options) = cases().remove(0);
-    for v in 1..3 {
+    for v in 1..4 {
         runs.push((Grid::Vmesh(v), "filtered-sun-shadows", camera, sun, options));
     }
     scenes_body(backend, Grid::Vmesh(0), runs)
@@ -290,7 +295,7 @@ fn bad_input(k: &FilteredKernel<'_>, grid: Grid) -> Result<Measure, String> {
 }
 
 pub fn vmesh_property(backend: &Backend) -> Result<Measure, String> {
-    property(backend, &[Grid::Vmesh(0), Grid::Vmesh(1), Grid::Vmesh(2)])
+    property(backend, &[Grid::Vmesh(0), Grid::Vmesh(1), Grid::Vmesh(2), Grid::Vmesh(3)])
 }
 
 pub fn adaptive_property(backend: &Backend) -> Result<Measure, String> {
