@@ -57,10 +57,7 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
     if gpu.is_some() {
         // The CPU run prints what it always did; a GPU run says which adapter rendered what.
         println!("backend: {backend_name}");
-        println!(
-            "(ground truth, baseline, Averages and [VJK21] on the GPU; virtual mesh and Adaptive \
-             on the CPU: see each row's backend)"
-        );
+        println!("(ground truth and every representation on the GPU: see each row's backend)");
     }
     for scene in &outcome.scenes {
         if let Some(f) = &scene.filtered {

@@ -113,7 +113,7 @@ pub struct FilteredResult {
 struct Built {
     method: String,
     grid: Box<dyn Appearance>,
-    /// The same records uploaded for the GPU kernel (Averages and \[VJK21\] on the GPU
+    /// The same records uploaded for the GPU kernel (every representation on the GPU
     /// backend): rendered there instead of from `grid`.
     gpu: Option<GpuRecords>,
     record_bytes: f64,
@@ -240,8 +240,8 @@ fn build_all(
             record_bytes: g.record_bytes() as f64,
             memory_bytes: g.memory_bytes(),
             precompute: precompute_vm,
+            gpu: gpu.map(|k| k.kernels.filtered.upload_virtual_mesh(&grid)).transpose()?,
             grid: Box::new(grid),
-            gpu: None,
             mix: None,
         });
     }
@@ -261,8 +261,8 @@ fn build_all(
             memory_bytes: g.memory_bytes(),
             precompute: candidates_time + t.elapsed(),
             mix: Some(g.mix()),
+            gpu: gpu.map(|k| k.kernels.filtered.upload_adaptive(&g)).transpose()?,
             grid: Box::new(g),
-            gpu: None,
         });
     }
     Ok(built)

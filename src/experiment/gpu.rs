@@ -1,9 +1,8 @@
-//! The experiment on the GPU backend (`voxlod compare --backend gpu`): every image with a GPU
-//! kernel — the ground truth, the baseline, Averages and \[VJK21\] — is rendered by
-//! voxlod-gpu's kernels on one adapter; the representations without a kernel (virtual mesh,
-//! Adaptive) stay on the CPU. Every row says which backend rendered it. Nothing falls back
-//! silently: a scene the GPU ground truth refuses (textured or alpha-tested materials) is an
-//! error naming the scene.
+//! The experiment on the GPU backend (`voxlod compare --backend gpu`): every image — the
+//! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
+//! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
+//! Every row says which backend rendered it. Nothing falls back silently: a scene the GPU
+//! ground truth refuses (textured or alpha-tested materials) is an error naming the scene.
 
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::{BrickMap, GridSpec};
@@ -19,8 +18,7 @@ pub enum Backend<'a> {
     /// Everything on the CPU reference (the default; the report is unchanged by the GPU code).
     #[default]
     Cpu,
-    /// The ground truth, the baseline, Averages and \[VJK21\] on this adapter; the virtual mesh
-    /// and Adaptive on the CPU (no GPU kernel).
+    /// The ground truth and every representation's rows on this adapter.
     Gpu(&'a Context),
 }
 

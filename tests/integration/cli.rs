@@ -286,8 +286,8 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
     // The CPU run is the run it always was: no backend anywhere.
     assert!(cpu.get("gt_backend").is_none(), "{cpu}");
     assert!(!cpu_report.contains("backend"), "{cpu_report}");
-    // The GPU run names its adapter for the ground truth, the baseline, Averages and [VJK21];
-    // the virtual mesh and Adaptive rows were rendered on the CPU.
+    // The GPU run names its adapter for the ground truth and every row (the baseline,
+    // Averages, [VJK21], the virtual mesh and Adaptive).
     let adapter = gpu["gt_backend"].as_str().expect("gt_backend").to_string();
     assert!(!adapter.is_empty() && adapter != "cpu", "{adapter}");
     assert!(gpu_report.contains("**Backend:**") && gpu_report.contains(&adapter));
@@ -310,9 +310,7 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
         assert!(c.get("backend").is_none(), "{c}");
         assert_eq!((&c["method"], &c["image"]), (&g["method"], &g["image"]));
         let method = g["method"].as_str().unwrap();
-        let expected =
-            if matches!(method, "Averages" | "[VJK21]") { adapter.as_str() } else { "cpu" };
-        assert_eq!(g["backend"], expected, "{g}");
+        assert_eq!(g["backend"], adapter.as_str(), "{g}");
         assert!(
             (ssim(g) - ssim(c)).abs() < 0.01,
             "{method} at {}²: SSIM {} on the GPU, {} on the CPU",

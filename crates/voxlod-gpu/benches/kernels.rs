@@ -20,7 +20,8 @@
 //!   CPU reference `voxlod_cpu::render::filtered::render` (rayon, all cores) with its cache
 //!   cleared before every frame (cold: the GPU kernel keeps no cache, so each GPU frame is a
 //!   cold frame); GPU with the records already uploaded. On lavapipe: CPU timings of the GPU
-//!   path.
+//!   path. Also the virtual mesh (Lines rule) and an Adaptive grid (τ = 0.08, errors from 64
+//!   held-out lines), whose GPU frames are the three passes of `filtered::voxels`.
 //!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
@@ -147,8 +148,10 @@ fn ground_truth(c: &mut Criterion) {
 }
 
 fn filtered(c: &mut Criterion) {
+    use voxlod_cpu::appearance::adaptive::{AdaptiveOptions, Candidates};
     use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
     use voxlod_cpu::appearance::sampler::SamplingContext;
+    use voxlod_cpu::appearance::vmesh::{self, VirtualMeshGrid};
     use voxlod_cpu::appearance::{averages, sggx};
     use voxlod_cpu::render::filtered::{FrameCache, Options, render};
     use voxlod_gpu::filtered::FilteredKernel;
@@ -163,6 +166,10 @@ fn filtered(c: &mut Criterion) {
     let opts = PrecomputeOptions { rays: 32, seed: 0 };
     let avg = precompute(&sampling, &opts, averages::fit).unwrap();
     let vjk = precompute(&sampling, &opts, sggx::fit).unwrap();
+    let vm = VirtualMeshGrid::new(precompute(&sampling, &opts, vmesh::fit).unwrap());
+    let adaptive_options = AdaptiveOptions { rays: 32, heldout: 64, ..Default::default() };
+    let candidates = Candidates::build(&sampling, &adaptive_options).unwrap();
+    let adaptive = candidates.select(0.08).unwrap();
     let camera = scene.default_camera().unwrap();
     let light = scene.light();
     let bg = scene.background;
@@ -184,6 +191,20 @@ fn filtered(c: &mut Criterion) {
             black_box(render(&mut cache, &camera, &light, bg, &options).unwrap())
         })
     });
+    let mut cache = FrameCache::new(&vm).unwrap();
+    group.bench_function("vmesh/cpu-cold", |b| {
+        b.iter(|| {
+            cache.clear();
+            black_box(render(&mut cache, &camera, &light, bg, &options).unwrap())
+        })
+    });
+    let mut cache = FrameCache::new(&adaptive).unwrap();
+    group.bench_function("adaptive/cpu-cold", |b| {
+        b.iter(|| {
+            cache.clear();
+            black_box(render(&mut cache, &camera, &light, bg, &options).unwrap())
+        })
+    });
     if let Some(ctx) = &ctx {
         let kernel = FilteredKernel::new(ctx).unwrap();
         let up = kernel.upload_averages(&avg).unwrap();
@@ -192,6 +213,14 @@ fn filtered(c: &mut Criterion) {
         });
         let up = kernel.upload_vjk21(&vjk).unwrap();
         group.bench_function("vjk21/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&up, &camera, &light, bg, &options).unwrap()))
+        });
+        let up = kernel.upload_virtual_mesh(&vm).unwrap();
+        group.bench_function("vmesh/gpu-path", |b| {
+            b.iter(|| black_box(kernel.render(&up, &camera, &light, bg, &options).unwrap()))
+        });
+        let up = kernel.upload_adaptive(&adaptive).unwrap();
+        group.bench_function("adaptive/gpu-path", |b| {
             b.iter(|| black_box(kernel.render(&up, &camera, &light, bg, &options).unwrap()))
         });
     }

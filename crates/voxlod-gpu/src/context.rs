@@ -383,6 +383,36 @@ impl Context {
         })
     }
 
+    /// Compute pipelines for the entry points `entries` of one WGSL module, sharing the
+    /// explicit `layout` (one bind group for all of them).
+    pub fn pipelines(
+        &self,
+        label: &'static str,
+        wgsl: &str,
+        entries: &[&str],
+        layout: &wgpu::PipelineLayout,
+    ) -> Result<Vec<wgpu::ComputePipeline>> {
+        self.guarded("compiling a kernel", || {
+            let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+            });
+            entries
+                .iter()
+                .map(|entry| {
+                    self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(label),
+                        layout: Some(layout),
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
+                })
+                .collect()
+        })
+    }
+
     /// Submits `encoder` and waits for it (with the timeout), inside error scopes.
     pub fn submit(&self, during: &'static str, encoder: wgpu::CommandEncoder) -> Result<()> {
         let index = self.guarded(during, || self.queue.submit([encoder.finish()]))?;

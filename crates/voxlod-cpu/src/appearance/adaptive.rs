@@ -420,6 +420,37 @@ impl AdaptiveGrid {
         self.refs.values()[index]
     }
 
+    /// The voxels' tags: voxel `i` of the brick map (its value order) uses record
+    /// `tag.index()` of its kind's array. Other backends (voxlod-gpu) upload these.
+    pub fn refs(&self) -> &BrickMap<AdaptiveRef> {
+        &self.refs
+    }
+
+    /// The Averages records.
+    pub fn average_records(&self) -> &[AverageRecord] {
+        &self.averages
+    }
+
+    /// The \[VJK21\] records.
+    pub fn sggx_records(&self) -> &[SggxRecord] {
+        &self.sggx
+    }
+
+    /// The virtual-mesh records.
+    pub fn vmesh_records(&self) -> &[VirtualMeshRecord] {
+        &self.vmesh
+    }
+
+    /// The specular side records, one per voxel in the tags' order, if the scene has them.
+    pub fn specular_records(&self) -> Option<&[SpecularRecord]> {
+        self.specular.as_deref()
+    }
+
+    /// The parameters the virtual-mesh records are read with.
+    pub fn vmesh_params(&self) -> VirtualMeshParams {
+        self.rule
+    }
+
     fn specular(&self, index: usize) -> Option<&SpecularRecord> {
         self.specular.as_ref().map(|s| &s[index])
     }

@@ -19,8 +19,11 @@ struct Params {
     light_b: vec4<f32>,      // directional: irradiance; point: intensity
     grid: vec4<f32>,         // origin (f32), w = voxel size (f32)
     dims: vec4<u32>,         // grid dims, w = flags (1: shadows, 2: point light)
-    size: vec4<u32>,         // width, height, max DDA steps, kind (0 Averages, 1 [VJK21], 2 baseline)
+    size: vec4<u32>,         // width, height, max DDA steps, kind (0 Averages, 1 [VJK21], 2 baseline,
+                             // 3 virtual mesh, 4 Adaptive)
     brick_dims: vec4<u32>,   // bricks per axis, 0
+    vmesh: vec4<u32>,        // virtual mesh: rule (0 Lines, 1 Circles), samples per face,
+                             // projected area (0/1), voxels with a record (voxels.wgsl)
 }
 
 // One allocated brick: occupancy in linear order (bit x + 8y + 64z of the 512, 16 words), and

@@ -22,7 +22,9 @@
 //! does (`normal_for`: the largest `|dir|` among the axes crossed), the first voxel stops the
 //! ray and is shaded at its entry point, and its shadow ray is the filtered one over records of
 //! opacity 1 (the transmittance drops to 0 at the first counted voxel: the CPU's "blocked").
-//! The virtual-mesh and Adaptive records are not ported yet.
+//! Virtual-mesh and Adaptive grids (record kinds 3 and 4, [`FilteredKernel::upload_virtual_mesh`],
+//! [`FilteredKernel::upload_adaptive`], rendered by the same [`FilteredKernel::render`]) run as
+//! per-voxel passes: see [`voxels`].
 //!
 //! # Use
 //! ```no_run
@@ -38,8 +40,8 @@
 //! ```
 //! `voxlod compare --backend gpu` calls it in place of [`voxlod_cpu::render::filtered::render`]
 //! and [`voxlod_cpu::render::baseline::render`] (same inputs, same image up to the stated
-//! bound) for its baseline, Averages and \[VJK21\] rows, and renders the virtual-mesh and
-//! Adaptive rows on the CPU; every row says which backend rendered it. `voxlod render` renders
+//! bound) for every row: baseline, Averages, \[VJK21\], virtual mesh and Adaptive; every row
+//! says which backend rendered it. `voxlod render` renders
 //! the ground truth only, not voxel representations.
 //!
 //! # No per-frame cache: why evaluating per hit gives the CPU's cached values
@@ -100,6 +102,8 @@ use voxlod_format::{BRICK_EDGE, BrickMap, GridSpec};
 use voxlod_scene::MaterialSample;
 use voxlod_scene::{Camera, Image, Light};
 
+pub mod voxels;
+
 use crate::raycast::entry;
 use crate::{Context, Error, Result, light_words};
 
@@ -137,6 +141,10 @@ pub struct GpuFilteredParams {
     pub size: [u32; 4],
     /// Bricks per axis, 0.
     pub brick_dims: [u32; 4],
+    /// Virtual-mesh and Adaptive grids ([`voxels`]): directional-opacity rule (0 Lines,
+    /// 1 Circles), shading samples per distribution face, projected-area scaling (0/1), and
+    /// the number of voxels with a record. Zero for the other kinds.
+    pub vmesh: [u32; 4],
 }
 
 /// One allocated brick (mirrors WGSL `Brick`).
@@ -176,6 +184,12 @@ pub enum RecordKind {
     /// [`BaselineVoxel`]: opaque cubes of one colour, the baseline renderer
     /// ([`voxlod_cpu::render::baseline`]).
     Baseline = 2,
+    /// [`VirtualMeshGrid`](voxlod_cpu::appearance::vmesh::VirtualMeshGrid): virtual mesh +
+    /// opacity subgrid, rendered by the per-voxel passes of [`voxels`].
+    VirtualMesh = 3,
+    /// [`AdaptiveGrid`](voxlod_cpu::appearance::adaptive::AdaptiveGrid): each voxel one of
+    /// the three, rendered by the per-voxel passes of [`voxels`].
+    Adaptive = 4,
 }
 
 /// The look-up arrays of a brick map: the dense brick table (`u32::MAX` = empty), the bricks'
@@ -227,6 +241,15 @@ pub struct GpuRecords {
     bricks: wgpu::Buffer,
     slots: wgpu::Buffer,
     records: wgpu::Buffer,
+    /// Virtual-mesh and Adaptive grids: the buffers of the per-voxel passes.
+    voxels: Option<voxels::VoxelBuffers>,
+}
+
+impl GpuRecords {
+    /// Which records these are.
+    pub fn kind(&self) -> RecordKind {
+        self.kind
+    }
 }
 
 /// The filtered renderer kernel for Averages and \[VJK21\] records, compiled for one
@@ -234,6 +257,8 @@ pub struct GpuRecords {
 pub struct FilteredKernel<'a> {
     ctx: &'a Context,
     pipeline: wgpu::ComputePipeline,
+    /// The per-voxel passes, compiled on first use (virtual-mesh and Adaptive grids).
+    passes: std::sync::OnceLock<voxels::Passes>,
 }
 
 /// Records with a linear albedo (both record kinds of the kernel).
@@ -265,7 +290,11 @@ fn non_empty<T: bytemuck::Pod + Default>(v: &mut Vec<T>) -> &[u8] {
 impl<'a> FilteredKernel<'a> {
     /// Compiles the kernel.
     pub fn new(ctx: &'a Context) -> Result<Self> {
-        Ok(Self { ctx, pipeline: ctx.pipeline("filtered averages", WGSL)? })
+        Ok(Self {
+            ctx,
+            pipeline: ctx.pipeline("filtered averages", WGSL)?,
+            passes: std::sync::OnceLock::new(),
+        })
     }
 
     /// Uploads `app` after the CPU renderer's checks on it (a [`FrameCache`] is built over its
@@ -363,6 +392,7 @@ impl<'a> FilteredKernel<'a> {
             bricks: ctx.storage_init("brick masks", non_empty(&mut bricks))?,
             slots: ctx.storage_init("record slots", non_empty(&mut slots))?,
             records: ctx.storage_init("filtered records", non_empty(&mut records))?,
+            voxels: None,
         })
     }
 
@@ -395,31 +425,13 @@ impl<'a> FilteredKernel<'a> {
     ) -> Result<Image> {
         let ctx = self.ctx;
         let light = check_frame(camera, light, background, options)?;
-        let Options { width, height, ambient, shadows } = *options;
+        let Options { width, height, .. } = *options;
         let (lx, ly) =
             ctx.image_dispatch("filtered image edge (workgroups of 8 pixels)", width, height)?;
-        let frame = camera.frame(width, height);
-        let grid = app.grid;
-        let eye_grid = ((camera.eye.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
-        let (point, la, lb) = light_words(&light);
-        let dims: UVec3 = grid.dims;
-        let brick_dims = (dims + BRICK_EDGE - 1) / BRICK_EDGE;
-        let steps = dims.x.saturating_add(dims.y).saturating_add(dims.z).saturating_add(3);
-        let params = GpuFilteredParams {
-            eye: camera.eye.extend(0.0).to_array(),
-            eye_grid: eye_grid.extend((1.0 / grid.voxel_size) as f32).to_array(),
-            forward: frame.forward.extend(0.0).to_array(),
-            right: frame.right.extend(0.0).to_array(),
-            up: frame.up.extend(0.0).to_array(),
-            background: background.extend(0.0).to_array(),
-            ambient: ambient.extend(0.0).to_array(),
-            light_a: la.extend(0.0).to_array(),
-            light_b: lb.extend(0.0).to_array(),
-            grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
-            dims: dims.extend(u32::from(shadows) | if point { 2 } else { 0 }).to_array(),
-            size: [width, height, steps, app.kind as u32],
-            brick_dims: brick_dims.extend(0).to_array(),
-        };
+        let params = Self::params(app, camera, &light, background, options);
+        if let Some(v) = &app.voxels {
+            return self.render_voxels(app, v, &params, (lx, ly));
+        }
         let bytes = width as u64 * height as u64 * 16;
         let out = ctx.storage_zeroed("filtered image", bytes)?;
         let uniform = ctx.uniform("filtered params", bytemuck::bytes_of(&params))?;
@@ -446,13 +458,50 @@ impl<'a> FilteredKernel<'a> {
             pass.dispatch_workgroups(lx, ly, 1);
         }
         ctx.submit("rendering filtered records", encoder)?;
-        let raw = ctx.read(&out, bytes)?;
-        let pixels: Vec<Vec4> = bytemuck::cast_slice::<u8, [f32; 4]>(&raw)
-            .iter()
-            .map(|p| Vec4::from_array(*p))
-            .collect();
-        Ok(Image { width, height, pixels })
+        read_image(ctx, &out, width, height)
     }
+
+    /// The kernel's parameters for a frame (inputs already checked by `check_frame`).
+    fn params(
+        app: &GpuRecords,
+        camera: &Camera,
+        light: &Light,
+        background: Vec3,
+        options: &Options,
+    ) -> GpuFilteredParams {
+        let Options { width, height, ambient, shadows } = *options;
+        let frame = camera.frame(width, height);
+        let grid = app.grid;
+        let eye_grid = ((camera.eye.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
+        let (point, la, lb) = light_words(light);
+        let dims: UVec3 = grid.dims;
+        let brick_dims = (dims + BRICK_EDGE - 1) / BRICK_EDGE;
+        let steps = dims.x.saturating_add(dims.y).saturating_add(dims.z).saturating_add(3);
+        GpuFilteredParams {
+            eye: camera.eye.extend(0.0).to_array(),
+            eye_grid: eye_grid.extend((1.0 / grid.voxel_size) as f32).to_array(),
+            forward: frame.forward.extend(0.0).to_array(),
+            right: frame.right.extend(0.0).to_array(),
+            up: frame.up.extend(0.0).to_array(),
+            background: background.extend(0.0).to_array(),
+            ambient: ambient.extend(0.0).to_array(),
+            light_a: la.extend(0.0).to_array(),
+            light_b: lb.extend(0.0).to_array(),
+            grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
+            dims: dims.extend(u32::from(shadows) | if point { 2 } else { 0 }).to_array(),
+            size: [width, height, steps, app.kind as u32],
+            brick_dims: brick_dims.extend(0).to_array(),
+            vmesh: app.voxels.as_ref().map_or([0; 4], |v| v.params),
+        }
+    }
+}
+
+/// Reads a `width × height` image of `vec4<f32>` pixels back.
+fn read_image(ctx: &Context, out: &wgpu::Buffer, width: u32, height: u32) -> Result<Image> {
+    let raw = ctx.read(out, width as u64 * height as u64 * 16)?;
+    let pixels: Vec<Vec4> =
+        bytemuck::cast_slice::<u8, [f32; 4]>(&raw).iter().map(|p| Vec4::from_array(*p)).collect();
+    Ok(Image { width, height, pixels })
 }
 
 #[cfg(test)]
@@ -485,6 +534,7 @@ mod tests {
                 ("dims", offset_of!(P, dims)),
                 ("size", offset_of!(P, size)),
                 ("brick_dims", offset_of!(P, brick_dims)),
+                ("vmesh", offset_of!(P, vmesh)),
             ],
         );
         assert_mirrors(

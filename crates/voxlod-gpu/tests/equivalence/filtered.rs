@@ -44,13 +44,13 @@ use voxlod_scene::{Camera, Image, Light, Scene};
 use crate::harness::{Backend, Measure};
 use crate::images::{ImageBound, compare};
 
-const EXACT: ImageBound = ImageBound { per_pixel: 0, fraction: 1.0 };
+pub const EXACT: ImageBound = ImageBound { per_pixel: 0, fraction: 1.0 };
 /// See the module docs.
 pub const GPU_BOUND: ImageBound = ImageBound { per_pixel: 1, fraction: 0.99 };
 
 /// Grid resolution and image edge of the cases.
-const RES: u32 = 40;
-const SIZE: u32 = 48;
+pub const RES: u32 = 40;
+pub const SIZE: u32 = 48;
 
 struct Fixture {
     scene: Scene,
@@ -88,6 +88,7 @@ fn app(kind: RecordKind) -> (&'static dyn Appearance, &'static BrickMap<()>) {
         RecordKind::Averages => (&f.averages, &layouts[0]),
         RecordKind::Vjk21 => (&f.vjk21, &layouts[1]),
         RecordKind::Baseline => unreachable!("the baseline's voxels are no Appearance"),
+        RecordKind::VirtualMesh | RecordKind::Adaptive => unreachable!("rows of voxels.rs"),
     }
 }
 
@@ -113,6 +114,7 @@ fn upload(k: &FilteredKernel<'_>, kind: RecordKind) -> Result<GpuRecords, String
         RecordKind::Averages => k.upload_averages(&f.averages),
         RecordKind::Vjk21 => k.upload_vjk21(&f.vjk21),
         RecordKind::Baseline => k.upload_baseline(&f.grid, &f.baseline),
+        RecordKind::VirtualMesh | RecordKind::Adaptive => unreachable!("rows of voxels.rs"),
     }
     .map_err(|e| e.to_string())
 }
@@ -154,6 +156,7 @@ fn prefix(kind: RecordKind) -> &'static str {
         RecordKind::Averages => "averages",
         RecordKind::Vjk21 => "vjk21",
         RecordKind::Baseline => "baseline",
+        RecordKind::VirtualMesh | RecordKind::Adaptive => unreachable!("rows of voxels.rs"),
     }
 }
 
@@ -181,7 +184,7 @@ pub fn vjk21_property(backend: &Backend) -> Result<Measure, String> {
     property(backend, RecordKind::Vjk21)
 }
 
-fn cases() -> Vec<(&'static str, Camera, Light, Options)> {
+pub fn cases() -> Vec<(&'static str, Camera, Light, Options)> {
     let f = fixture();
     let camera = f.scene.default_camera().expect("a camera");
     let (lo, hi) = f.scene.bounds().unwrap();

@@ -82,3 +82,15 @@ fn write_failure(
     }
     Ok(dir.display().to_string())
 }
+
+/// The largest difference of any channel of any pixel, in 8-bit sRGB steps (0 for images of
+/// different sizes, which [`compare`] reports).
+pub fn worst_step(actual: &Image, expected: &Image) -> u8 {
+    let (a, e) = (actual.to_srgb8(), expected.to_srgb8());
+    a.pixels
+        .iter()
+        .zip(&e.pixels)
+        .map(|(p, q)| (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap())
+        .max()
+        .unwrap_or(0)
+}

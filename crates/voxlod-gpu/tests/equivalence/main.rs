@@ -1,6 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
-//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`]),
+//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
+//! [`voxels`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -17,6 +18,7 @@ mod images;
 mod random;
 mod raycast;
 mod voxelize;
+mod voxels;
 
 use harness::{Backend, Expect, KnownIssue, Suite};
 
@@ -49,6 +51,10 @@ fn equivalence_suite() {
         suite.run("filtered VJK21 (proptest)", backend, filtered::vjk21_property);
         suite.run("baseline voxels (scenes)", backend, filtered::baseline_scenes);
         suite.run("baseline voxels (proptest)", backend, filtered::baseline_property);
+        suite.run("filtered virtual mesh (scenes)", backend, voxels::vmesh_scenes);
+        suite.run("filtered virtual mesh (proptest)", backend, voxels::vmesh_property);
+        suite.run("filtered Adaptive (scenes)", backend, voxels::adaptive_scenes);
+        suite.run("filtered Adaptive (proptest)", backend, voxels::adaptive_property);
     }
     suite.finish();
 }
