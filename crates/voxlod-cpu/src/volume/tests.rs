@@ -7,7 +7,7 @@ use voxlod_scene::procedural::Rng;
 use voxlod_scene::{Camera, Image};
 
 use super::binning::{bin, bin_brute_force, prepare};
-use super::fill::{fill, fill_unaccelerated};
+use super::fill::{fill, fill_unaccelerated, fill_with};
 use super::march::{render, render_exact, render_front_to_back, sort_order};
 use super::*;
 use crate::render::test_scenes::quad;
@@ -120,6 +120,12 @@ fn fill_early_accept_and_reject_equal_the_unaccelerated_fill() {
                 |v: &[Vec4]| v.iter().map(|x| x.to_array().map(f32::to_bits)).collect::<Vec<_>>();
             assert_eq!(bits(&mv.voxels), bits(&voxels), "metavoxel {:?} M {m}", b.coord);
             assert_eq!(emission, emission_ref, "metavoxel {:?} M {m}", b.coord);
+            // The portable build too (fill takes the AVX2 one where the CPU has it).
+            let (portable, emission_portable) =
+                fill_with(&spheres, &prepared, map, &spec, b, false);
+            assert_eq!(bits(&portable.voxels), bits(&voxels), "portable, {:?} M {m}", b.coord);
+            assert_eq!(emission_portable, emission_ref, "portable, {:?} M {m}", b.coord);
+            assert_eq!(portable.occupied, mv.occupied);
             covered += voxels.iter().filter(|v| v.w > 0.0).count();
             // Every voxel written lies in the occupied box.
             let [lo, hi] = mv.occupied;

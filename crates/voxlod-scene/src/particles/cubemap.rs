@@ -194,15 +194,19 @@ impl DisplacementMap {
         // in the padded copy, two adjacent pairs one padded row apart.
         let stride = n + 1;
         let sf = Vec4::splat(stride as f32);
-        let corner = trunc4(face * (sf * sf) + y0 * sf + x0).to_array();
+        let [c0, c1, c2, c3] = trunc4(face * (sf * sf) + y0 * sf + x0).to_array();
+        // One bounds check per lane; written out (an array `map` here was not inlined into
+        // the AVX2 build of the fill, and passed the texels through memory).
         let p = &self.padded;
-        let pair = |i: usize| -> [f32; 2] { [p[i], p[i + 1]] };
-        let [t0, t1, t2, t3] = corner.map(|i| pair(i as usize));
-        let [u0, u1, u2, u3] = corner.map(|i| pair(i as usize + stride));
-        let a0 = Vec4::new(t0[0], t1[0], t2[0], t3[0]);
-        let b0 = Vec4::new(t0[1], t1[1], t2[1], t3[1]);
-        let a1 = Vec4::new(u0[0], u1[0], u2[0], u3[0]);
-        let b1 = Vec4::new(u0[1], u1[1], u2[1], u3[1]);
+        let q0 = &p[c0 as usize..][..stride + 2];
+        let q1 = &p[c1 as usize..][..stride + 2];
+        let q2 = &p[c2 as usize..][..stride + 2];
+        let q3 = &p[c3 as usize..][..stride + 2];
+        let a0 = Vec4::new(q0[0], q1[0], q2[0], q3[0]);
+        let b0 = Vec4::new(q0[1], q1[1], q2[1], q3[1]);
+        let a1 = Vec4::new(q0[stride], q1[stride], q2[stride], q3[stride]);
+        let t = stride + 1;
+        let b1 = Vec4::new(q0[t], q1[t], q2[t], q3[t]);
         let (r0, r1) = (a0 + (b0 - a0) * fx, a1 + (b1 - a1) * fx);
         r0 + (r1 - r0) * fy
     }
