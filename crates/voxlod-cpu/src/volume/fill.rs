@@ -92,7 +92,7 @@ pub(crate) fn fill_with(
     #[cfg(target_arch = "x86_64")]
     let avx2 = detect && std::arch::is_x86_feature_detected!("avx2");
     #[cfg(not(target_arch = "x86_64"))]
-    let avx2 = detect && false;
+    let _ = detect;
     let m = spec.metavoxel_edge as usize;
     let m3 = m * m * m;
     let layers = SLAB_LAYERS.min(m);
