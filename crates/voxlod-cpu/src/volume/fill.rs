@@ -4,12 +4,15 @@
 //! channel; albedo and emission kept apart so that only the albedo is lit).
 //!
 //! Coverage of the displaced sphere, in voxel units with squared distances (no square root on
-//! the fast paths): `d² > outer²` is outside without reading the cube map (early reject),
-//! `d² ≤ inner²` is inside without reading it (early accept, unless the colour mode needs the
-//! displacement), and in the shell between them the voxel is inside when `d² ≤ r²`,
-//! `r = inner + amplitude · n(direction)`. Since `n ∈ [0, 1]`, `inner ≤ r ≤ outer` in floating
-//! point too, so the early exits never change the answer: [`fill_unaccelerated`] (every
-//! particle, every voxel, always the cube map) gives bit-identical voxels, which a test checks.
+//! the fast paths): in the shell the voxel is inside when `d² ≤ r²`,
+//! `r = inner + amplitude · n(direction)`. The early exits use the cube map's bounds
+//! `[n_lo, n_hi]` ([`DisplacementMap::bounds`], the texel range widened for rounding), within
+//! `[0, 1]` and usually well inside it: `d² > r_hi²` is outside without reading the cube map
+//! (early reject), `d² ≤ max(inner, r_lo)²` is inside without reading it (early accept, unless
+//! the colour mode needs the displacement), `r_lo, r_hi` the radii at `n_lo, n_hi`. Since `r`
+//! is non-decreasing in `n` in floating point too, the early exits never change the answer:
+//! [`fill_unaccelerated`] (every particle, every voxel, always the cube map) gives bit-identical
+//! voxels, which a test checks.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -17,6 +20,9 @@ use voxlod_scene::particles::{ColorMode, DisplacedSphere, DisplacementMap};
 
 use super::binning::{Bin, Prepared};
 use super::{Metavoxel, VolumeSpec};
+
+/// Lane offsets of four consecutive voxels of a row.
+const LANES: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
 
 /// Per-voxel accumulator of one particle's contribution.
 #[inline]
@@ -29,13 +35,17 @@ fn accumulate(
     index: usize,
     len: usize,
 ) {
-    voxel.w += s.density;
+    // One load and one store of the voxel (writing `w` alone and then reading the whole
+    // voxel back stalled on store-to-load forwarding).
+    let v = *voxel;
+    let w = v.w + s.density;
     let c = s.color_at(dist, n);
     if s.emissive() {
         let e = emission.get_or_insert_with(|| vec![Vec3::ZERO; len]);
         e[index] = e[index].max(c);
+        *voxel = v.truncate().extend(w);
     } else {
-        *voxel = c.max(voxel.truncate()).extend(voxel.w);
+        *voxel = c.max(v.truncate()).extend(w);
     }
 }
 
@@ -50,9 +60,11 @@ type Slab = ([[u32; 3]; 2], Option<Vec<Vec3>>);
 /// when an emissive particle covers any voxel. Lighting comes after ([`super::propagate`]).
 ///
 /// Per particle only its voxel box clipped to the metavoxel is visited, and in it only the
-/// x-span of each row that the outer sphere can reach (solved per row with a one-voxel margin,
-/// so that the per-voxel `d² > outer²` test, unchanged, still decides): the same voxels and the
-/// same arithmetic per voxel as the plain loop, so the same bits ([`fill_unaccelerated`]).
+/// x-span of each row that the sphere of radius `r_hi` can reach (solved per row with a
+/// one-voxel margin, so that the per-voxel `d² > r_hi²` test still decides). The span is
+/// walked four voxels at a time ([`DisplacedSphere::displacement4`]: one 4-lane cube-map
+/// look-up), each lane doing the scalar loop's arithmetic for its voxel: the same voxels and
+/// the same arithmetic per voxel as the plain loop, so the same bits ([`fill_unaccelerated`]).
 /// Slabs of `SLAB_LAYERS` (8) layers run in parallel; each voxel still sees its particles in
 /// particle order. The box of the voxels written is kept ([`Metavoxel::occupied`]) for the
 /// later stages.
@@ -63,6 +75,24 @@ pub fn fill(
     spec: &VolumeSpec,
     bin: &Bin,
 ) -> (Metavoxel, Option<Vec<Vec3>>) {
+    fill_with(spheres, prepared, map, spec, bin, true)
+}
+
+/// [`fill`], compiled for AVX2 when `detect` and the CPU has it (the same source and the same
+/// bits: AVX2 does not bring FMA, and nothing is reassociated; VEX encoding, blends for the
+/// selects); the portable (SSE2) build otherwise. The tests run both.
+pub(crate) fn fill_with(
+    spheres: &[DisplacedSphere],
+    prepared: &[Prepared],
+    map: &DisplacementMap,
+    spec: &VolumeSpec,
+    bin: &Bin,
+    detect: bool,
+) -> (Metavoxel, Option<Vec<Vec3>>) {
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = detect && std::arch::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = detect;
     let m = spec.metavoxel_edge as usize;
     let m3 = m * m * m;
     let layers = SLAB_LAYERS.min(m);
@@ -70,7 +100,15 @@ pub fn fill(
     let slabs: Vec<Slab> = voxels
         .par_chunks_mut(layers * m * m)
         .enumerate()
-        .map(|(i, chunk)| fill_slab(spheres, prepared, map, spec, bin, i * layers, chunk))
+        .map(|(i, chunk)| {
+            let c0 = i * layers;
+            #[cfg(target_arch = "x86_64")]
+            if avx2 {
+                // SAFETY: the CPU has AVX2 (checked above).
+                return unsafe { fill_slab_avx2(spheres, prepared, map, spec, bin, c0, chunk) };
+            }
+            fill_slab(spheres, prepared, map, spec, bin, c0, chunk)
+        })
         .collect();
     let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
     for ([a, b], _) in &slabs {
@@ -103,9 +141,25 @@ pub fn fill(
     (mv, emission)
 }
 
+/// [`fill_slab`] compiled with AVX2 enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn fill_slab_avx2(
+    spheres: &[DisplacedSphere],
+    prepared: &[Prepared],
+    map: &DisplacementMap,
+    spec: &VolumeSpec,
+    bin: &Bin,
+    c0: usize,
+    voxels: &mut [Vec4],
+) -> Slab {
+    fill_slab(spheres, prepared, map, spec, bin, c0, voxels)
+}
+
 /// Fills layers `c0..` of the metavoxel of `bin` into `voxels` (whole layers); returns the box
 /// of the voxels written (metavoxel-local, `[lo, hi)`, `lo[0] ≥ hi[0]` when none) and the
 /// slab's emission.
+#[inline(always)]
 fn fill_slab(
     spheres: &[DisplacedSphere],
     prepared: &[Prepared],
@@ -123,12 +177,19 @@ fn fill_slab(
     let f = &spec.frame;
     let mut emission = None;
     let (mut occ_lo, mut occ_hi) = ([u32::MAX; 3], [0u32; 3]);
+    let [n_lo, n_hi] = map.bounds();
     for &pi in &bin.particles {
         let (s, p) = (&spheres[pi as usize], &prepared[pi as usize]);
-        // The particle's voxel range inside this metavoxel (voxel centres within the outer
-        // radius lie in it), then inside this slab.
-        let lo = (p.center - p.outer - base - 0.5).ceil().max(Vec3::ZERO);
-        let hi = (p.center + p.outer - base - 0.5).floor().min(Vec3::splat((m - 1) as f32));
+        // The surface radius `r = inner + amplitude · n` is non-decreasing in `n` (rounding
+        // included), so the map's bounds bound it: a voxel beyond `r_hi` is outside and one
+        // within `r_lo` inside whatever the map says there. `r_hi ≤ outer` unless the map
+        // reaches 1; it is the radius that decides below.
+        let (r_lo, r_hi) = (p.inner + p.amplitude * n_lo, p.inner + p.amplitude * n_hi);
+        // The particle's voxel range inside this metavoxel (voxel centres within `r_hi` lie
+        // in it, with a margin for the rounding), then inside this slab.
+        let reach = r_hi * (1.0 + 1e-5) + 1e-3;
+        let lo = (p.center - reach - base - 0.5).ceil().max(Vec3::ZERO);
+        let hi = (p.center + reach - base - 0.5).floor().min(Vec3::splat((m - 1) as f32));
         if lo.cmpgt(hi).any() {
             continue;
         }
@@ -136,13 +197,20 @@ fn fill_slab(
         if z0 >= z1 {
             continue;
         }
-        let (inner2, outer2) = (p.inner * p.inner, p.outer * p.outer);
+        let accept = p.inner.max(r_lo);
+        let (accept2, reject2) = (accept * accept, r_hi * r_hi);
         let needs_n = s.color_needs_displacement();
         let ramp = s.color_mode == ColorMode::RadialRamp as u32;
-        // Rows whose (y, z) distance exceeds this cannot hold a voxel within the outer radius
-        // (the relative margin covers the rounding of the per-voxel d²).
-        let reach2 = outer2 * (1.0 + 1e-5);
+        // Rows whose (y, z) distance exceeds this cannot hold a voxel within `r_hi` (the
+        // relative margin covers the rounding of the per-voxel d²).
+        let reach2 = reject2 * (1.0 + 1e-5);
         let centre_a = p.center.x - base.x - 0.5;
+        // Lane-wise constants of the per-voxel arithmetic below.
+        let (accept2v, reject2v) = (Vec4::splat(accept2), Vec4::splat(reject2));
+        let (bx, cx) = (Vec4::splat(base.x), Vec4::splat(p.center.x));
+        let (ux, uy, uz) = (Vec4::splat(f.u.x), Vec4::splat(f.u.y), Vec4::splat(f.u.z));
+        let (p_inner, p_amp) = (Vec4::splat(p.inner), Vec4::splat(p.amplitude));
+        let vs = Vec4::splat(f.voxel_size);
         for c in z0..z1 {
             let qz = base.z + c as f32 + 0.5 - p.center.z;
             let wz = f.w * qz;
@@ -152,40 +220,63 @@ fn fill_slab(
                 if yz2 > reach2 {
                     continue;
                 }
+                // The row's x-span, widened by a voxel (and by the truncation toward zero,
+                // which is within a voxel of the ceiling or floor): any superset of the
+                // voxels within the outer radius gives the same voxels, the per-voxel test
+                // deciding.
                 let half = (reach2 - yz2).sqrt() + 1.0;
-                let a0 = (centre_a - half).ceil().max(lo.x) as usize;
-                let a1 = (centre_a + half).floor().min(hi.x);
-                if a1 < a0 as f32 {
+                let a0 = ((centre_a - half) as i32).max(lo.x as i32);
+                let a1 = ((centre_a + half) as i32).min(hi.x as i32);
+                if a1 < a0 {
                     continue;
                 }
+                let (a0, a1) = (a0 as usize, a1 as usize);
                 let vy = f.v * qy;
+                let (qy2, qz2) = (Vec4::splat(qy * qy), Vec4::splat(qz * qz));
+                let (vyx, vyy, vyz) = (Vec4::splat(vy.x), Vec4::splat(vy.y), Vec4::splat(vy.z));
+                let (wzx, wzy, wzz) = (Vec4::splat(wz.x), Vec4::splat(wz.y), Vec4::splat(wz.z));
                 let row = ((c - c0) * m + b) * m;
                 let (mut first, mut last) = (usize::MAX, 0usize);
-                for a in a0..=a1 as usize {
-                    let qx = base.x + a as f32 + 0.5 - p.center.x;
-                    let d2 = Vec3::new(qx, qy, qz).length_squared();
-                    if d2 > outer2 {
-                        continue; // early reject
+                // Four voxels of the row at a time, every lane computing exactly what the
+                // scalar loop of `fill_unaccelerated` computes for its voxel.
+                for a in (a0..=a1).step_by(4) {
+                    let lanes = Vec4::splat(a as f32) + LANES;
+                    let qx = bx + lanes + 0.5 - cx;
+                    let d2 = qx * qx + qy2 + qz2; // `Vec3::length_squared`, same order
+                    let live = lanes.cmple(Vec4::splat(a1 as f32)) & d2.cmple(reject2v);
+                    if !live.any() {
+                        continue; // early reject of all four
                     }
-                    let n = if d2 <= inner2 && !needs_n {
-                        0.0 // early accept: the displacement is not needed
+                    let inside = d2.cmple(accept2v);
+                    let (n, covered) = if !needs_n && (live & !inside).bitmask() == 0 {
+                        (Vec4::ZERO, live) // early accept: the displacement is not needed
                     } else {
-                        // `LightSpace::offset_to_world(q)`, its products of y and z hoisted.
-                        let n = s.displacement(map, (f.u * qx + vy + wz) * f.voxel_size);
-                        if d2 > inner2 {
-                            let r = p.inner + p.amplitude * n;
-                            if d2 > r * r {
-                                continue;
-                            }
-                        }
-                        n
+                        // `LightSpace::offset_to_world(q)`, the products of y and z hoisted.
+                        let ox = (ux * qx + vyx + wzx) * vs;
+                        let oy = (uy * qx + vyy + wzy) * vs;
+                        let oz = (uz * qx + vyz + wzz) * vs;
+                        let n = s.displacement4(map, ox, oy, oz);
+                        let r = p_inner + p_amp * n;
+                        let covered = live & (inside | d2.cmple(r * r));
+                        // The scalar loop does not read the map for an early accept.
+                        let n = if needs_n { n } else { Vec4::select(inside, Vec4::ZERO, n) };
+                        (n, covered)
                     };
-                    let index = row + a;
-                    // Only the radial ramp reads the distance.
-                    let dist = if ramp { d2.sqrt() * f.voxel_size } else { 0.0 };
-                    accumulate(s, dist, n, &mut voxels[index], &mut emission, index, len);
-                    first = first.min(a);
-                    last = a;
+                    let mut bits = covered.bitmask();
+                    if bits == 0 {
+                        continue;
+                    }
+                    let (n, d2) = (n.to_array(), d2.to_array());
+                    first = first.min(a + bits.trailing_zeros() as usize);
+                    last = a + 31 - bits.leading_zeros() as usize;
+                    while bits != 0 {
+                        let i = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let index = row + a + i;
+                        // Only the radial ramp reads the distance.
+                        let dist = if ramp { d2[i].sqrt() * f.voxel_size } else { 0.0 };
+                        accumulate(s, dist, n[i], &mut voxels[index], &mut emission, index, len);
+                    }
                 }
                 if first <= last {
                     let (a, b, c) = (first as u32, b as u32, c as u32);

@@ -29,7 +29,7 @@ pub mod presets;
 mod tests;
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 pub use cubemap::DisplacementMap;
 pub use presets::{CloudParams, ExplosionParams, SmokeParams, cloud_bank, explosion, smoke_column};
@@ -240,6 +240,14 @@ impl DisplacedSphere {
     pub fn displacement(&self, map: &DisplacementMap, offset: Vec3) -> f32 {
         let (c, s) = (self.rot_cos, self.rot_sin);
         map.sample(Vec3::new(c * offset.x + s * offset.z, offset.y, c * offset.z - s * offset.x))
+    }
+
+    /// Four displacements at once: lane `i` is [`DisplacedSphere::displacement`] of offset
+    /// `(x[i], y[i], z[i])`, the same bits for finite offsets ([`DisplacementMap::sample4`]).
+    #[inline(always)]
+    pub fn displacement4(&self, map: &DisplacementMap, x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
+        let (c, s) = (Vec4::splat(self.rot_cos), Vec4::splat(self.rot_sin));
+        map.sample4(c * x + s * z, y, c * z - s * x)
     }
 
     /// Radius of the displaced surface for displacement `n`: `inner + amplitude · n`, within

@@ -131,6 +131,53 @@ fn cube_map_sample_equals_the_plain_lookup_bit_for_bit() {
 }
 
 #[test]
+fn four_lane_lookup_equals_the_scalar_lookup_bit_for_bit() {
+    use glam::Vec4;
+    for size in [1, 2, 16, 32] {
+        let map = DisplacementMap::noise(7, size, 3.0, 4).unwrap();
+        let mut rng = crate::procedural::Rng::new(100 + size as u64);
+        let mut dirs: Vec<Vec3> =
+            (0..20_000).map(|_| rng.unit_vector() * rng.range(0.01, 40.0)).collect();
+        // Ties between axes, axes of both signs, the zero vector, signed zeros, non-finite.
+        for a in [0.0f32, -0.0, 1.0, -1.0, 0.5, -2.0] {
+            for b in [0.0f32, -0.0, 1.0, -1.0, 2.0] {
+                for c in [0.0f32, 1.0, -1.0, f32::NAN, f32::INFINITY] {
+                    dirs.extend([Vec3::new(a, b, c), Vec3::new(c, a, b), Vec3::new(b, c, a)]);
+                }
+            }
+        }
+        let s = DisplacedSphere { rot_cos: 0.6, rot_sin: -0.8, ..Default::default() };
+        for quad in dirs.chunks(4) {
+            let lane = |i: usize| quad[i.min(quad.len() - 1)];
+            let (x, y, z) = (
+                Vec4::from_array([0, 1, 2, 3].map(|i| lane(i).x)),
+                Vec4::from_array([0, 1, 2, 3].map(|i| lane(i).y)),
+                Vec4::from_array([0, 1, 2, 3].map(|i| lane(i).z)),
+            );
+            let (four, rotated) = (map.sample4(x, y, z), s.displacement4(&map, x, y, z));
+            let [lo, hi] = map.bounds();
+            for i in 0..4 {
+                let d = lane(i);
+                if d.is_finite() {
+                    assert!((lo..=hi).contains(&four[i]), "at {d}: {} not in {lo}..{hi}", four[i]);
+                }
+                let same = |a: f32, b: f32| a.to_bits() == b.to_bits() || a.is_nan() && b.is_nan();
+                assert!(same(four[i], map.sample(d)), "at {d}: {} {}", four[i], map.sample(d));
+                let r = s.displacement(&map, d);
+                assert!(same(rotated[i], r), "rotated, at {d}: {} {r}", rotated[i]);
+            }
+        }
+        // The bounds are the texel range, barely widened.
+        let [lo, hi] = map.bounds();
+        let t = map.texels();
+        let (tmin, tmax) = t.iter().fold((1.0f32, 0.0f32), |(a, b), &v| (a.min(v), b.max(v)));
+        assert!(lo <= tmin && tmin - lo <= 1e-6 && hi >= tmax && hi - tmax <= 1e-6);
+    }
+    let flat = DisplacementMap::constant(0.25);
+    assert_eq!(flat.sample4(Vec4::ONE, Vec4::ZERO, -Vec4::ONE), Vec4::splat(0.25));
+}
+
+#[test]
 fn presets_are_deterministic_valid_and_sized() {
     let a = smoke_column(&SmokeParams { count: 500, ..Default::default() }).unwrap();
     let b = smoke_column(&SmokeParams { count: 500, ..Default::default() }).unwrap();
