@@ -87,8 +87,46 @@ fn slab(o: Vec3, d: Vec3, lo: f32, hi: f32) -> (f32, f32) {
     (t0, t1)
 }
 
+/// What the march knows about one sample, handed to [`trace_shaded`]'s radiance function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleInfo {
+    /// Sample position in grid coordinates (level-0 voxels, [`voxlod_format::GridSpec::to_grid`]).
+    pub pos: Vec3,
+    /// Distance from the apex along the axis, voxels.
+    pub t: f32,
+    /// Footprint diameter read, voxels (≥ 1).
+    pub diameter: f32,
+    /// Fractional level sampled ([`voxlod_octree::Octree::level_for_diameter`] of `diameter`).
+    pub level: f32,
+}
+
 /// Marches `cone` through `tree` (module docs). Non-finite apex or direction gathers nothing.
 pub fn trace<M: ConeMedium>(tree: &Octree<M>, cone: &Cone, march: &March) -> ConeResult {
+    march_cone(tree, cone, march, 0.0, |s: &M, _: &SampleInfo| s.radiance())
+}
+
+/// [`trace`], with the radiance of every sample that adds opacity given by `radiance(sample,
+/// info)` instead of [`ConeMedium::radiance`] (e.g. shading a pre-filtered colour and normal
+/// under a light, as [`crate::primary`] does). Same march, same accumulation.
+pub fn trace_shaded<M: ConeMedium>(
+    tree: &Octree<M>,
+    cone: &Cone,
+    march: &March,
+    radiance: impl FnMut(&M, &SampleInfo) -> Vec3,
+) -> ConeResult {
+    march_cone(tree, cone, march, 0.0, radiance)
+}
+
+/// The march of [`trace`] with a diameter `d0` voxels at the apex: the footprint at distance
+/// `t` is `max(d0 + 2·t·tan(θ/2), 1)` (a cone whose apex is `d0` wide, e.g. a shadow cone
+/// leaving a sample that already covers a pixel's footprint).
+pub(crate) fn march_cone<M: ConeMedium>(
+    tree: &Octree<M>,
+    cone: &Cone,
+    march: &March,
+    d0: f32,
+    mut radiance: impl FnMut(&M, &SampleInfo) -> Vec3,
+) -> ConeResult {
     let mut out = ConeResult::default();
     let grid = tree.grid();
     let voxel = grid.voxel_size as f32;
@@ -99,6 +137,7 @@ pub fn trace<M: ConeMedium>(tree: &Octree<M>, cone: &Cone, march: &March) -> Con
     if dir == Vec3::ZERO {
         return out;
     }
+    let d0 = if d0.is_finite() { d0.max(0.0) } else { 0.0 };
     let origin = grid.to_grid(DVec3::from(cone.apex)).as_vec3();
     let res = (1u64 << tree.depth()) as f32;
     let (enter, exit) = slab(origin, dir, -1.0, res + 1.0);
@@ -112,7 +151,7 @@ pub fn trace<M: ConeMedium>(tree: &Octree<M>, cone: &Cone, march: &March) -> Con
     let apex_offset = origin.distance(ao_point);
     let mut a = 0.0f32;
     while t <= max_t && a < march.opacity_cutoff {
-        let d = (two_tan * t).max(1.0);
+        let d = (d0 + two_tan * t).max(1.0);
         let d = if d.is_finite() { d } else { f32::MAX };
         let p = origin + dir * t;
         let level = tree.level_for_diameter(d);
@@ -125,7 +164,10 @@ pub fn trace<M: ConeMedium>(tree: &Octree<M>, cone: &Cone, march: &March) -> Con
             let crossed = step.min((exit - t).max(0.0));
             let corrected = 1.0 - (1.0 - alpha).powf(crossed / node);
             let w = (1.0 - a) * corrected.clamp(0.0, 1.0);
-            out.radiance += w * s.radiance();
+            if w > 0.0 {
+                let info = SampleInfo { pos: p, t, diameter: d, level };
+                out.radiance += w * radiance(&s, &info);
+            }
             if ao_radius > 0.0 {
                 out.occlusion += w * falloff(p.distance(ao_point), ao_radius);
             }

@@ -42,7 +42,7 @@ pub enum Light {
 }
 
 impl Light {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let (v, e) = match *self {
             Light::Directional { to_light, irradiance } => {
                 check(

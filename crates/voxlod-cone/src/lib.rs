@@ -9,11 +9,12 @@
 //! | [`inject`](mod@inject) | [`inject()`]: light with shadows into the leaves; [`InjectionCache`]: no re-injection when nothing changed |
 //! | [`cone`] | one cone's march: **aperture (full angle)**, footprint level, step, opacity correction, AO falloff — defined there once |
 //! | [`tracer`] | [`ConeTracer`]: AO, diffuse and specular cones from a shading point; self-occlusion offsets |
+//! | [`primary`] | [`PrimaryRenderer`]: primary visibility, one pixel-wide cone per pixel, level of detail by distance, shaded samples |
 //!
 //! Layering: depends on `voxlod-octree` and `voxlod-format` only (no BVH, no GPU API). Shadows
 //! at injection are either marched through the geometry octree itself or given per leaf by the
-//! caller ([`Shadows`]). Not here yet: the wgpu kernel, level of detail for primary
-//! visibility, Heitz–Neyret differential cone tracing.
+//! caller ([`Shadows`]). Not here yet: the wgpu kernel, Heitz–Neyret differential cone
+//! tracing.
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
@@ -54,12 +55,16 @@ pub mod cone;
 mod error;
 pub mod inject;
 pub mod medium;
+pub mod primary;
 pub mod tracer;
 
-pub use cone::{Cone, ConeResult, March, falloff, trace};
+pub use cone::{Cone, ConeResult, March, SampleInfo, falloff, trace, trace_shaded};
 pub use error::{Error, Result};
 pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};
 pub use medium::{ConeMedium, RadianceLeaf, RadiancePayload};
+pub use primary::{
+    PinholeCamera, PrimaryImage, PrimaryOptions, PrimaryPixel, PrimaryRenderer, ShadeInput,
+};
 pub use tracer::{ConeTracer, TraceOptions, specular_aperture};
 
 #[cfg(test)]

@@ -1,0 +1,583 @@
+//! Primary visibility with level of detail chosen by distance ("mip-mapping for voxels"): one
+//! cone per pixel from the camera, as wide as the pixel, marched front to back through the
+//! geometry octree of pre-filtered Averages ([`voxlod_octree::AveragePayload`]: colour, normal,
+//! opacity), each sample shaded under the scene's light ([`PrimaryRenderer`]).
+//!
+//! # Definitions (the march itself is [`crate::cone`]'s: steps, opacity correction, accumulation)
+//! - **Camera**: a pinhole ([`PinholeCamera`]) with the ray convention of voxlod-scene's
+//!   `CameraFrame::ray_dir` (pixel `(x, y)` from the top-left, its centre at `(x + ½, y + ½)`,
+//!   vertical field of view `fov_y`, square pixels), so images align with the ground truth.
+//! - **Footprint**: at distance `t` along a pixel's ray the cone's diameter is
+//!   `d(t) = bias · t · 2·tan(fov_y/2) / height` — the cone that covers one pixel (on the optical
+//!   axis; off-axis pixels are slightly larger and not corrected), scaled by the **LOD bias**
+//!   `b ≥ 0`. That is a cone of full aperture `θ = 2·atan(b·tan(fov_y/2)/height)`; the octree is
+//!   read with diameter `max(d, 1)` voxels (level `log2`), so near voxels come from fine levels
+//!   and far ones from coarse levels. `b = 1` is the pixel footprint, `b = 0` always reads level
+//!   0 (the finest-level march, the reference), `b < 1` sharper, `b > 1` blurrier and cheaper.
+//! - **Step**: `step_factor · max(d, 1 voxel)` (fine levels step by voxels, coarse ones by their
+//!   node size), so with `b = 0` the march steps `step_factor` voxels.
+//! - **Shading**: every sample that adds opacity is shaded by the caller's function with the
+//!   sample's opacity-weighted mean colour (albedo) and its mean normal turned toward the viewer
+//!   (two-sided, as voxlod-cpu shades Averages records; the direction to the viewer where the
+//!   normals cancel), the direction to the viewer and the light's visibility; the renderer
+//!   composites the results front to back. The `voxlod` CLI passes voxlod-cpu's `shade()`.
+//! - **Visibility** (with [`PrimaryOptions::shadows`]): a shadow cone toward the light through
+//!   the same octree, starting as wide as the sample's footprint and widening at the same
+//!   aperture, from the sample moved `1.5·max(d, 1)` voxels along its shading normal; `V = 1 − A`
+//!   with `A` its accumulated opacity, ending one voxel short of a point light. Computed at a
+//!   pixel's first contributing sample and again only once the march has moved more than one
+//!   footprint from where it was last computed (the samples of one surface crossing share it).
+//!   Zero where the normal faces away from the light (`n·l ≤ 0`: the Lambert term is zero).
+//! - **Output**: RGBA per pixel, `rgb = L + (1 − A)·background`, `a = A` (coverage), linear.
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+use voxlod_octree::{AveragePayload, Octree};
+
+use crate::cone::{Cone, March, SampleInfo, march_cone};
+use crate::error::check;
+use crate::inject::Light;
+use crate::{Error, Result};
+
+/// Largest image side [`PrimaryRenderer`] accepts.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// A pinhole camera (module docs for the ray convention).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PinholeCamera {
+    /// Eye position (world).
+    pub eye: Vec3,
+    /// Point looked at (world).
+    pub target: Vec3,
+    /// Up hint (world), not parallel to `target − eye`.
+    pub up: Vec3,
+    /// Vertical field of view, full angle in degrees, in (0, 180).
+    pub fov_y_deg: f32,
+    /// Image width in pixels, in 1..=[`MAX_IMAGE_SIDE`].
+    pub width: u32,
+    /// Image height in pixels, in 1..=[`MAX_IMAGE_SIDE`].
+    pub height: u32,
+}
+
+/// Options of a [`PrimaryRenderer`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimaryOptions {
+    /// Footprint multiplier `b` (module docs), finite and ≥ 0 (default 1: the pixel footprint;
+    /// 0: always the finest level).
+    pub lod_bias: f32,
+    /// Step as a fraction of the footprint diameter, in \[0.05, 4\] (default 0.5).
+    pub step_factor: f32,
+    /// Longest distance marched from the eye, world units, > 0 (`f32::INFINITY`: until the
+    /// cone leaves the octree).
+    pub max_distance: f32,
+    /// Accumulated opacity at which a pixel's march stops, in (0, 1\] (default 0.99).
+    pub opacity_cutoff: f32,
+    /// Trace shadow cones toward the light (module docs; default on).
+    pub shadows: bool,
+    /// Linear RGB composited behind what the march did not cover, finite.
+    pub background: Vec3,
+}
+
+impl Default for PrimaryOptions {
+    fn default() -> Self {
+        Self {
+            lod_bias: 1.0,
+            step_factor: 0.5,
+            max_distance: f32::INFINITY,
+            opacity_cutoff: 0.99,
+            shadows: true,
+            background: Vec3::ZERO,
+        }
+    }
+}
+
+impl PrimaryOptions {
+    /// Checks every field against its documented range; errors name the field.
+    pub fn validate(&self) -> Result<()> {
+        let b = self.lod_bias;
+        check(b.is_finite() && b >= 0.0, "lod_bias", b, "finite and >= 0")?;
+        let s = self.step_factor;
+        check((0.05..=4.0).contains(&s), "step_factor", s, "in [0.05, 4]")?;
+        let m = self.max_distance;
+        check(m > 0.0, "max_distance", m, "> 0 (infinity allowed)")?;
+        let c = self.opacity_cutoff;
+        check(c > 0.0 && c <= 1.0, "opacity_cutoff", c, "in (0, 1]")?;
+        let g = self.background;
+        check(g.is_finite(), "background", g.max_element(), "finite")?;
+        Ok(())
+    }
+}
+
+impl PinholeCamera {
+    /// Checks the camera; errors name the field.
+    pub fn validate(&self) -> Result<()> {
+        check(self.eye.is_finite(), "camera eye", self.eye.length(), "finite")?;
+        let f = self.target - self.eye;
+        check(
+            f.is_finite() && f.length() > 0.0,
+            "camera target",
+            f.length(),
+            "finite, not the eye",
+        )?;
+        let cross = f.normalize().cross(self.up);
+        check(
+            self.up.is_finite() && cross.length_squared() > 1e-12,
+            "camera up",
+            self.up.length(),
+            "finite, not parallel to the view direction",
+        )?;
+        let v = self.fov_y_deg;
+        check(v > 0.0 && v < 180.0, "fov_y_deg", v, "a full angle in (0, 180)")?;
+        for (name, side) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_IMAGE_SIDE).contains(&side) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value: side.to_string(),
+                    reason: "in 1..=16384 pixels",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What the caller's shading function gets for one sample (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadeInput {
+    /// World position of the sample.
+    pub position: Vec3,
+    /// Opacity-weighted mean colour of the sample (linear albedo).
+    pub albedo: Vec3,
+    /// Unit shading normal, turned toward the viewer (two-sided).
+    pub normal: Vec3,
+    /// Unit direction toward the eye.
+    pub to_viewer: Vec3,
+    /// Light visibility in \[0, 1\] (1 without shadows).
+    pub visibility: f32,
+    /// Footprint diameter read, voxels (≥ 1), and the fractional level sampled.
+    pub diameter: f32,
+    /// Fractional octree level sampled (0 = leaves).
+    pub level: f32,
+    /// Distance from the eye, voxels.
+    pub distance_voxels: f32,
+}
+
+/// One pixel's outcome.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PrimaryPixel {
+    /// Linear RGB with the background composited, and coverage.
+    pub rgba: Vec4,
+    /// Octree samples of the primary cone.
+    pub samples: u32,
+    /// Octree samples of its shadow cones.
+    pub shadow_samples: u32,
+}
+
+/// A rendered image: row-major from the top-left, and the samples it took.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimaryImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height` linear RGBA pixels (module docs).
+    pub pixels: Vec<Vec4>,
+    /// Primary-cone octree samples over all pixels.
+    pub samples: u64,
+    /// Shadow-cone octree samples over all pixels.
+    pub shadow_samples: u64,
+}
+
+/// Renders an Averages octree from a [`PinholeCamera`] with footprint-driven level of detail
+/// (module docs).
+#[derive(Clone, Debug)]
+pub struct PrimaryRenderer<'a> {
+    tree: &'a Octree<AveragePayload>,
+    camera: PinholeCamera,
+    light: Light,
+    options: PrimaryOptions,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// `b · 2·tan(fov/2) / height`: footprint per unit distance.
+    spread: f32,
+    voxel: f32,
+}
+
+impl<'a> PrimaryRenderer<'a> {
+    /// A renderer of `tree` seen from `camera` under `light`. Errors on an invalid camera,
+    /// option or light, each naming the field.
+    pub fn new(
+        tree: &'a Octree<AveragePayload>,
+        camera: PinholeCamera,
+        light: Light,
+        options: PrimaryOptions,
+    ) -> Result<Self> {
+        camera.validate()?;
+        options.validate()?;
+        light.validate()?;
+        let forward = (camera.target - camera.eye).normalize();
+        let right = forward.cross(camera.up).normalize();
+        let up = right.cross(forward);
+        let tan = (camera.fov_y_deg.to_radians() * 0.5).tan();
+        let aspect = camera.width as f32 / camera.height as f32;
+        let spread = options.lod_bias * 2.0 * tan / camera.height as f32;
+        check(spread.is_finite(), "lod_bias", options.lod_bias, "a finite footprint per distance")?;
+        Ok(Self {
+            tree,
+            camera,
+            light,
+            options,
+            forward,
+            right: right * (tan * aspect),
+            up: up * tan,
+            spread,
+            voxel: tree.grid().voxel_size as f32,
+        })
+    }
+
+    /// The options.
+    pub fn options(&self) -> &PrimaryOptions {
+        &self.options
+    }
+
+    /// Footprint diameter (voxels, before the 1-voxel floor) at `t` voxels from the eye:
+    /// `bias · t · 2·tan(fov/2)/height` (module docs). Linear in `t`.
+    pub fn footprint_voxels(&self, t: f32) -> f32 {
+        self.spread * t
+    }
+
+    /// The fractional level a sample `t` voxels from the eye reads.
+    pub fn level_at(&self, t: f32) -> f32 {
+        self.tree.level_for_diameter(self.footprint_voxels(t))
+    }
+
+    /// The distance from the eye, voxels, at which the footprint spans `voxels` voxels (`None`
+    /// with bias 0: never).
+    pub fn distance_for_footprint(&self, voxels: f32) -> Option<f32> {
+        (self.spread > 0.0).then(|| voxels / self.spread)
+    }
+
+    /// The full aperture of the pixel cones, radians: `2·atan(spread/2)`.
+    pub fn aperture(&self) -> f32 {
+        2.0 * (0.5 * self.spread).atan()
+    }
+
+    /// Unit direction of the ray through image point `p` (pixels from the top-left).
+    pub fn ray_dir(&self, px: f32, py: f32) -> Vec3 {
+        let ndc_x = 2.0 * px / self.camera.width as f32 - 1.0;
+        let ndc_y = 1.0 - 2.0 * py / self.camera.height as f32;
+        (self.forward + self.right * ndc_x + self.up * ndc_y).normalize()
+    }
+
+    /// Visibility of the light from a sample (module docs) and the samples it took.
+    /// `t`: the sample's distance from the eye, voxels.
+    fn visibility(&self, position: Vec3, normal: Vec3, t: f32) -> (f32, u32) {
+        let footprint = self.footprint_voxels(t);
+        let Some((l, e, _)) = self.light.at(position) else { return (1.0, 0) };
+        if normal.dot(l) <= 0.0 || e == Vec3::ZERO {
+            return (0.0, 0);
+        }
+        let offset = 1.5 * footprint.max(1.0) * self.voxel;
+        let apex = position + normal * offset;
+        let Some((dir, _, to_light)) = self.light.at(apex) else { return (1.0, 0) };
+        let march = March {
+            start_voxels: 0.0,
+            step_factor: self.options.step_factor,
+            max_distance: (to_light - self.voxel).max(0.0),
+            opacity_cutoff: 0.99,
+            ao: None,
+        };
+        let cone = Cone { apex, dir, aperture: self.aperture() };
+        let r = march_cone(self.tree, &cone, &march, footprint, |_: &AveragePayload, _| Vec3::ZERO);
+        (1.0 - r.opacity, r.steps)
+    }
+
+    /// Marches pixel `(x, y)`'s cone, shading each contributing sample with `shade`.
+    pub fn pixel(
+        &self,
+        x: u32,
+        y: u32,
+        shade: &(impl Fn(&ShadeInput) -> Vec3 + ?Sized),
+    ) -> PrimaryPixel {
+        let dir = self.ray_dir(x as f32 + 0.5, y as f32 + 0.5);
+        let cone = Cone { apex: self.camera.eye, dir, aperture: self.aperture() };
+        let march = March {
+            start_voxels: 0.0,
+            step_factor: self.options.step_factor,
+            max_distance: self.options.max_distance,
+            opacity_cutoff: self.options.opacity_cutoff,
+            ao: None,
+        };
+        // (where the visibility was last computed, grid coordinates; the visibility)
+        let mut shadow: Option<(Vec3, f32)> = None;
+        let mut shadow_samples = 0u32;
+        let r = march_cone(self.tree, &cone, &march, 0.0, |s: &AveragePayload, i: &SampleInfo| {
+            let position = self.camera.eye + dir * (i.t * self.voxel);
+            let n = s.normal();
+            let normal = if n == Vec3::ZERO {
+                -dir
+            } else if n.dot(dir) > 0.0 {
+                -n
+            } else {
+                n
+            };
+            let visibility = if self.options.shadows {
+                match shadow {
+                    Some((at, v)) if at.distance(i.pos) <= i.diameter => v,
+                    _ => {
+                        let (v, n) = self.visibility(position, normal, i.t);
+                        shadow_samples += n;
+                        shadow = Some((i.pos, v));
+                        v
+                    }
+                }
+            } else {
+                1.0
+            };
+            shade(&ShadeInput {
+                position,
+                albedo: s.color(),
+                normal,
+                to_viewer: -dir,
+                visibility,
+                diameter: i.diameter,
+                level: i.level,
+                distance_voxels: i.t,
+            })
+        });
+        let rgb = r.radiance + (1.0 - r.opacity) * self.options.background;
+        PrimaryPixel { rgba: rgb.extend(r.opacity), samples: r.steps, shadow_samples }
+    }
+
+    /// Renders every pixel (rayon over rows).
+    pub fn render(&self, shade: &(impl Fn(&ShadeInput) -> Vec3 + Sync + ?Sized)) -> PrimaryImage {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let rows: Vec<Vec<PrimaryPixel>> = (0..h)
+            .into_par_iter()
+            .map(|y| (0..w).map(|x| self.pixel(x, y, shade)).collect())
+            .collect();
+        let mut img = PrimaryImage {
+            width: w,
+            height: h,
+            pixels: Vec::with_capacity(w as usize * h as usize),
+            samples: 0,
+            shadow_samples: 0,
+        };
+        for p in rows.into_iter().flatten() {
+            img.pixels.push(p.rgba);
+            img.samples += p.samples as u64;
+            img.shadow_samples += p.shadow_samples as u64;
+        }
+        img
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Mutex;
+
+    use glam::{DVec3, UVec3};
+    use voxlod_format::GridSpec;
+    use voxlod_octree::BuildOptions;
+
+    use super::*;
+
+    /// A 64³ grid (1-unit voxels) with an opaque white slab `z ∈ [40, 48)` facing −z.
+    fn wall() -> Octree<AveragePayload> {
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap();
+        let mut v = Vec::new();
+        for z in 40..48 {
+            for y in 0..64 {
+                for x in 0..64 {
+                    let p = AveragePayload::new(Vec3::ONE, Vec3::NEG_Z, 1.0);
+                    v.push((UVec3::new(x, y, z), p));
+                }
+            }
+        }
+        Octree::build(grid, v, &BuildOptions { depth: None, dense_log2: 3 }).unwrap()
+    }
+
+    fn camera(eye_z: f32, fov: f32, side: u32) -> PinholeCamera {
+        PinholeCamera {
+            eye: Vec3::new(32.0, 32.0, eye_z),
+            target: Vec3::new(32.0, 32.0, eye_z + 1.0),
+            up: Vec3::Y,
+            fov_y_deg: fov,
+            width: side,
+            height: side,
+        }
+    }
+
+    const LIGHT: Light = Light::Directional { to_light: Vec3::NEG_Z, irradiance: Vec3::ONE };
+
+    fn lambert(s: &ShadeInput) -> Vec3 {
+        s.albedo * s.normal.dot(Vec3::NEG_Z).max(0.0) * s.visibility
+    }
+
+    fn with_bias(b: f32) -> PrimaryOptions {
+        PrimaryOptions { lod_bias: b, background: Vec3::new(0.1, 0.2, 0.3), ..Default::default() }
+    }
+
+    #[test]
+    fn footprint_grows_linearly_with_distance() {
+        let tree = wall();
+        let r = PrimaryRenderer::new(&tree, camera(0.0, 60.0, 100), LIGHT, with_bias(1.0)).unwrap();
+        let per_voxel = 2.0 * 30f32.to_radians().tan() / 100.0;
+        for t in [1.0f32, 10.0, 100.0, 1000.0] {
+            assert!((r.footprint_voxels(t) - t * per_voxel).abs() <= 1e-6 * t, "{t}");
+            assert!((r.footprint_voxels(3.0 * t) - 3.0 * r.footprint_voxels(t)).abs() < 1e-5 * t);
+        }
+        let r2 =
+            PrimaryRenderer::new(&tree, camera(0.0, 60.0, 100), LIGHT, with_bias(2.0)).unwrap();
+        assert!((r2.footprint_voxels(50.0) - 2.0 * r.footprint_voxels(50.0)).abs() < 1e-5);
+        // The cone's aperture gives the same diameter: d(t) = 2·t·tan(θ/2).
+        assert!((2.0 * 50.0 * (0.5 * r.aperture()).tan() - r.footprint_voxels(50.0)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn diameters_below_one_voxel_give_the_finest_march_exactly() {
+        let tree = wall();
+        // Eye 20 voxels in front of the cube: every distance in the cube is below 150 voxels,
+        // and 150 · 1e-3 · 2·tan(30°)/16 ≈ 0.01 voxel.
+        let cam = camera(-20.0, 60.0, 16);
+        let fine =
+            PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
+        let tiny =
+            PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(1e-3)).unwrap().render(&lambert);
+        assert_eq!(fine, tiny);
+        assert!(fine.pixels.iter().any(|p| p.w > 0.9 && p.x > 0.5), "the wall is lit and seen");
+        // From far away the pixel footprint spans many voxels: fewer samples than level 0.
+        let far = camera(-1500.0, 3.0, 16);
+        let fine =
+            PrimaryRenderer::new(&tree, far, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
+        let lod = PrimaryRenderer::new(&tree, far, LIGHT, with_bias(1.0)).unwrap().render(&lambert);
+        assert!(lod.samples * 2 < fine.samples, "{} vs {}", lod.samples, fine.samples);
+        assert_ne!(fine.pixels, lod.pixels);
+    }
+
+    #[test]
+    fn an_empty_octree_gives_the_background() {
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(16)).unwrap();
+        let tree = Octree::build(grid, Vec::new(), &BuildOptions::default()).unwrap();
+        let o = with_bias(1.0);
+        let img =
+            PrimaryRenderer::new(&tree, camera(-5.0, 60.0, 8), LIGHT, o).unwrap().render(&lambert);
+        assert_eq!(img.pixels.len(), 64);
+        assert!(img.pixels.iter().all(|&p| p == o.background.extend(0.0)), "{:?}", img.pixels[0]);
+    }
+
+    #[test]
+    fn extreme_apertures_and_a_camera_inside_geometry_stay_finite() {
+        let tree = wall();
+        let cases = [
+            (camera(-10.0, 1e-3, 8), 1.0),
+            (camera(-10.0, 179.9, 8), 1.0),
+            (camera(44.0, 60.0, 8), 1.0), // inside the slab
+            (camera(44.0, 179.9, 8), 1e3),
+            (camera(-1e6, 1e-3, 4), 1.0),
+        ];
+        for (cam, b) in cases {
+            let r = PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(b)).unwrap();
+            let img = r.render(&lambert);
+            for p in &img.pixels {
+                assert!(p.is_finite() && (0.0..=1.0).contains(&p.w), "{cam:?} bias {b}: {p}");
+            }
+        }
+        // Inside the slab the first sample is already opaque.
+        let r = PrimaryRenderer::new(&tree, camera(44.0, 60.0, 8), LIGHT, with_bias(1.0)).unwrap();
+        assert!(r.pixel(4, 4, &lambert).rgba.w > 0.99);
+    }
+
+    #[test]
+    fn the_level_sampled_where_the_footprint_spans_2_to_the_k_voxels_is_k() {
+        let tree = wall();
+        for k in 0..4u32 {
+            let probe =
+                PrimaryRenderer::new(&tree, camera(0.0, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
+            let d = probe.distance_for_footprint((1u32 << k) as f32).unwrap();
+            // The wall's face (z = 40) at distance d from the eye, on the centre pixel's ray.
+            let r = PrimaryRenderer::new(&tree, camera(40.0 - d, 20.0, 63), LIGHT, with_bias(1.0))
+                .unwrap();
+            let seen = Mutex::new(Vec::new());
+            let px = r.pixel(31, 31, &|s: &ShadeInput| {
+                seen.lock().unwrap().push((s.distance_voxels, s.level, s.diameter));
+                lambert(s)
+            });
+            // A slab one node thick at level 3 composites to ≈ 0.81 (trilinear hat × step
+            // correction), not 0.99: coarse levels see surfaces as partly transparent.
+            assert!(px.rgba.w > 0.75, "k = {k}: {px:?}");
+            let seen = seen.into_inner().unwrap();
+            let &(t, level, diameter) = seen.first().expect("a contributing sample");
+            // The first contributing sample lies within the trilinear support of the face.
+            assert!((t - d).abs() <= 2.0 * (1u32 << k) as f32, "k = {k}: t = {t}, d = {d}");
+            assert!((level - k as f32).abs() < 0.02, "k = {k}: level {level}");
+            for &(t, level, diameter) in &seen {
+                assert!((diameter - r.footprint_voxels(t).max(1.0)).abs() < 1e-3 * diameter);
+                assert!((level - diameter.log2()).abs() < 1e-5);
+            }
+            assert!(diameter >= 1.0);
+        }
+    }
+
+    #[test]
+    fn shadows_darken_what_an_occluder_hides_from_the_light() {
+        // Light from −z, a wall at z = 40 and a 16×16 plate at z = 17..21 between the light and
+        // the wall; the eye sits between plate and wall, looking at the wall's shadowed part.
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap();
+        let mut v = Vec::new();
+        for y in 0..64 {
+            for x in 0..64 {
+                v.push((UVec3::new(x, y, 40), AveragePayload::new(Vec3::ONE, Vec3::NEG_Z, 1.0)));
+            }
+        }
+        // 4 voxels thick: a 1-voxel plate lets about half the light through a cone that reads
+        // it between levels 0 and 1 (the known thin-wall leak, crate README).
+        for z in 17..21 {
+            for y in 24..40 {
+                for x in 24..40 {
+                    let p = AveragePayload::new(Vec3::ONE, Vec3::NEG_Z, 1.0);
+                    v.push((UVec3::new(x, y, z), p));
+                }
+            }
+        }
+        let tree = Octree::build(grid, v, &BuildOptions::default()).unwrap();
+        let cam = PinholeCamera {
+            eye: Vec3::new(32.0, 32.0, 30.0),
+            target: Vec3::new(32.0, 32.0, 40.0),
+            up: Vec3::Y,
+            fov_y_deg: 10.0,
+            width: 4,
+            height: 4,
+        };
+        let lit = |shadows| {
+            let o = PrimaryOptions { shadows, ..with_bias(1.0) };
+            PrimaryRenderer::new(&tree, cam, LIGHT, o).unwrap().pixel(2, 2, &lambert)
+        };
+        let (on, off) = (lit(true), lit(false));
+        assert!(off.rgba.x > 0.9 && on.rgba.x < 0.1, "{on:?} {off:?}");
+        assert!(on.shadow_samples > 0 && off.shadow_samples == 0);
+    }
+
+    #[test]
+    fn bad_options_are_named_errors() {
+        let tree = wall();
+        let cam = camera(0.0, 60.0, 8);
+        let err = |cam: PinholeCamera, o: PrimaryOptions| {
+            PrimaryRenderer::new(&tree, cam, LIGHT, o).unwrap_err().to_string()
+        };
+        assert!(err(cam, with_bias(-1.0)).contains("lod_bias"));
+        assert!(err(cam, with_bias(f32::NAN)).contains("lod_bias"));
+        assert!(err(cam, with_bias(f32::MAX)).contains("lod_bias"));
+        let o = with_bias(1.0);
+        assert!(err(cam, PrimaryOptions { step_factor: 0.0, ..o }).contains("step_factor"));
+        assert!(err(cam, PrimaryOptions { max_distance: 0.0, ..o }).contains("max_distance"));
+        assert!(err(cam, PrimaryOptions { opacity_cutoff: 0.0, ..o }).contains("opacity_cutoff"));
+        let g = Vec3::splat(f32::INFINITY);
+        assert!(err(cam, PrimaryOptions { background: g, ..o }).contains("background"));
+        assert!(err(PinholeCamera { fov_y_deg: 180.0, ..cam }, o).contains("fov_y_deg"));
+        assert!(err(PinholeCamera { width: 0, ..cam }, o).contains("width"));
+        assert!(err(PinholeCamera { up: Vec3::Z, ..cam }, o).contains("camera up"));
+        assert!(err(PinholeCamera { target: cam.eye, ..cam }, o).contains("camera target"));
+    }
+}
