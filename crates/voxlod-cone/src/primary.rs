@@ -28,16 +28,52 @@
 //!   pixel's first contributing sample and again only once the march has moved more than one
 //!   footprint from where it was last computed (the samples of one surface crossing share it).
 //!   Zero where the normal faces away from the light (`n·l ≤ 0`: the Lambert term is zero).
+//! - **Opacity at coarse levels**: with [`AveragePayload`] a node's opacity is its coverage (the
+//!   mean of its children), so a one-voxel surface read at level `l` has opacity `2^−l` and
+//!   fades toward the background with distance (a ground plane turns translucent);
+//!   `Directional<AveragePayload>` ([`SurfaceMedium`]) stores the opacity of crossing each node
+//!   along the axes, which keeps it opaque face-on (tested). Even then the trilinear hat and the
+//!   step correction composite a surface one node thick to ≈ 0.8, not 1.
 //! - **Output**: RGBA per pixel, `rgb = L + (1 − A)·background`, `a = A` (coverage), linear.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
-use voxlod_octree::{AveragePayload, Octree};
+use voxlod_octree::{AveragePayload, Directional, Octree};
 
 use crate::cone::{Cone, March, SampleInfo, march_cone};
 use crate::error::check;
 use crate::inject::Light;
+use crate::medium::ConeMedium;
 use crate::{Error, Result};
+
+/// A payload primary visibility can shade: a [`ConeMedium`] with an opacity-weighted mean
+/// colour and normal. [`AveragePayload`] (isotropic opacity: coverage, the mean of eight
+/// children) and `Directional<AveragePayload>` (six opacities composited along the axes, the
+/// opacity of crossing a node: a thin surface seen face-on stays opaque at coarse levels).
+pub trait SurfaceMedium: ConeMedium {
+    /// Opacity-weighted mean colour (linear albedo).
+    fn albedo(&self) -> Vec3;
+    /// Unit mean normal, zero where the weighted normals cancel.
+    fn mean_normal(&self) -> Vec3;
+}
+
+impl SurfaceMedium for AveragePayload {
+    fn albedo(&self) -> Vec3 {
+        self.color()
+    }
+    fn mean_normal(&self) -> Vec3 {
+        self.normal()
+    }
+}
+
+impl SurfaceMedium for Directional<AveragePayload> {
+    fn albedo(&self) -> Vec3 {
+        self.inner.color()
+    }
+    fn mean_normal(&self) -> Vec3 {
+        self.inner.normal()
+    }
+}
 
 /// Largest image side [`PrimaryRenderer`] accepts.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -188,11 +224,11 @@ pub struct PrimaryImage {
     pub shadow_samples: u64,
 }
 
-/// Renders an Averages octree from a [`PinholeCamera`] with footprint-driven level of detail
-/// (module docs).
+/// Renders an Averages octree ([`SurfaceMedium`]) from a [`PinholeCamera`] with
+/// footprint-driven level of detail (module docs).
 #[derive(Clone, Debug)]
-pub struct PrimaryRenderer<'a> {
-    tree: &'a Octree<AveragePayload>,
+pub struct PrimaryRenderer<'a, M = AveragePayload> {
+    tree: &'a Octree<M>,
     camera: PinholeCamera,
     light: Light,
     options: PrimaryOptions,
@@ -204,11 +240,11 @@ pub struct PrimaryRenderer<'a> {
     voxel: f32,
 }
 
-impl<'a> PrimaryRenderer<'a> {
+impl<'a, M: SurfaceMedium> PrimaryRenderer<'a, M> {
     /// A renderer of `tree` seen from `camera` under `light`. Errors on an invalid camera,
     /// option or light, each naming the field.
     pub fn new(
-        tree: &'a Octree<AveragePayload>,
+        tree: &'a Octree<M>,
         camera: PinholeCamera,
         light: Light,
         options: PrimaryOptions,
@@ -289,7 +325,7 @@ impl<'a> PrimaryRenderer<'a> {
             ao: None,
         };
         let cone = Cone { apex, dir, aperture: self.aperture() };
-        let r = march_cone(self.tree, &cone, &march, footprint, |_: &AveragePayload, _| Vec3::ZERO);
+        let r = march_cone(self.tree, &cone, &march, footprint, |_: &M, _| Vec3::ZERO);
         (1.0 - r.opacity, r.steps)
     }
 
@@ -312,9 +348,9 @@ impl<'a> PrimaryRenderer<'a> {
         // (where the visibility was last computed, grid coordinates; the visibility)
         let mut shadow: Option<(Vec3, f32)> = None;
         let mut shadow_samples = 0u32;
-        let r = march_cone(self.tree, &cone, &march, 0.0, |s: &AveragePayload, i: &SampleInfo| {
+        let r = march_cone(self.tree, &cone, &march, 0.0, |s: &M, i: &SampleInfo| {
             let position = self.camera.eye + dir * (i.t * self.voxel);
-            let n = s.normal();
+            let n = s.mean_normal();
             let normal = if n == Vec3::ZERO {
                 -dir
             } else if n.dot(dir) > 0.0 {
@@ -337,7 +373,7 @@ impl<'a> PrimaryRenderer<'a> {
             };
             shade(&ShadeInput {
                 position,
-                albedo: s.color(),
+                albedo: s.albedo(),
                 normal,
                 to_viewer: -dir,
                 visibility,
@@ -459,7 +495,8 @@ mod tests {
     #[test]
     fn an_empty_octree_gives_the_background() {
         let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(16)).unwrap();
-        let tree = Octree::build(grid, Vec::new(), &BuildOptions::default()).unwrap();
+        let tree: Octree<AveragePayload> =
+            Octree::build(grid, Vec::new(), &BuildOptions::default()).unwrap();
         let o = with_bias(1.0);
         let img =
             PrimaryRenderer::new(&tree, camera(-5.0, 60.0, 8), LIGHT, o).unwrap().render(&lambert);
@@ -557,6 +594,35 @@ mod tests {
         let (on, off) = (lit(true), lit(false));
         assert!(off.rgba.x > 0.9 && on.rgba.x < 0.1, "{on:?} {off:?}");
         assert!(on.shadow_samples > 0 && off.shadow_samples == 0);
+    }
+
+    #[test]
+    fn directional_opacities_keep_a_thin_wall_opaque_at_coarse_levels() {
+        // A 1-voxel wall at z = 40 seen face-on where the footprint spans 8 voxels (level 3):
+        // its level-3 coverage is 1/8, its opacity of crossing along z is 1.
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap();
+        let leaf = AveragePayload::new(Vec3::ONE, Vec3::NEG_Z, 1.0);
+        let voxels: Vec<_> =
+            (0..64).flat_map(|y| (0..64).map(move |x| (UVec3::new(x, y, 40), leaf))).collect();
+        let o = BuildOptions { depth: None, dense_log2: 3 };
+        let iso = Octree::build(grid, voxels.clone(), &o).unwrap();
+        let dir: Octree<Directional<AveragePayload>> = Octree::build(
+            grid,
+            voxels.into_iter().map(|(c, p)| (c, Directional::isotropic(p))),
+            &o,
+        )
+        .unwrap();
+        let probe =
+            PrimaryRenderer::new(&iso, camera(0.0, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
+        let d = probe.distance_for_footprint(8.0).unwrap();
+        let cam = camera(40.0 - d, 20.0, 63);
+        let a = PrimaryRenderer::new(&iso, cam, LIGHT, with_bias(1.0)).unwrap();
+        let b = PrimaryRenderer::new(&dir, cam, LIGHT, with_bias(1.0)).unwrap();
+        let (a, b) = (a.pixel(31, 31, &lambert).rgba.w, b.pixel(31, 31, &lambert).rgba.w);
+        assert!(a < 0.4 && b > 0.7, "isotropic {a}, directional {b}");
+        // At level 0 both see the same opaque wall.
+        let a0 = PrimaryRenderer::new(&iso, cam, LIGHT, with_bias(0.0)).unwrap();
+        assert!(a0.pixel(31, 31, &lambert).rgba.w > 0.99);
     }
 
     #[test]
