@@ -211,6 +211,29 @@ pub struct ConeArgs {
     /// AO radius as a fraction of the scene's bounding-box diagonal.
     #[arg(long, default_value_t = 0.1)]
     pub ao_radius: f32,
+    /// Primary visibility with level of detail by distance: the scene rendered by one
+    /// pixel-wide cone per pixel through its Averages octree ("none" skips it).
+    #[arg(long, default_value = "builtin:forest")]
+    pub lod_scene: String,
+    /// Voxels along the longest axis of the LOD scene's octree (a power of two, 4..=1024).
+    #[arg(long, default_value_t = 256)]
+    pub lod_res: u32,
+    /// Image side of the LOD renders, pixels.
+    #[arg(long, default_value_t = 128)]
+    pub lod_size: u32,
+    /// LOD biases (footprint multipliers; 0 = always the finest level, the reference march),
+    /// comma-separated.
+    #[arg(long, default_value = "0,0.5,1,2,4", value_delimiter = ',')]
+    pub lod_bias: Vec<f32>,
+    /// Step of the LOD march as a fraction of the footprint diameter.
+    #[arg(long, default_value_t = 0.5)]
+    pub lod_step: f32,
+    /// Moves the LOD scene's default camera away from its target by this factor (> 0).
+    #[arg(long, default_value_t = 1.0)]
+    pub lod_zoom_out: f32,
+    /// Rays per pixel of the LOD scene's ground-truth mesh render.
+    #[arg(long, default_value_t = 64)]
+    pub lod_spp: u32,
     /// Output directory.
     #[arg(short, long, default_value = "out/cone")]
     pub output: PathBuf,

@@ -9,6 +9,10 @@
 //! option set and octree, AO and `albedo · E/π` from the pixel-centre G-buffer → MSE and SSIM
 //! against the references (`voxlod_cpu::render::indirect`, `--spp`
 //! rays, seed 0; seed 1 measures the references' own noise).
+//!
+//! Then, unless `--lod-scene none`, primary visibility with level of detail by distance on
+//! `--lod-scene` (`cone_primary`): error, samples and time per LOD bias against the
+//! finest-level march and the ground-truth mesh render.
 
 use std::time::Instant;
 
@@ -92,6 +96,8 @@ pub struct ConeOutcome {
     pub rows: Vec<ConeRow>,
     /// Light leaking.
     pub leaks: Vec<LeakRow>,
+    /// Primary visibility with level of detail by distance (`--lod-scene`; none for "none").
+    pub primary: Option<super::cone_primary::PrimaryOutcome>,
 }
 
 fn gray(gb: &GBuffer, v: &[f32]) -> Srgb8Image {
@@ -115,7 +121,7 @@ fn ms(t: Instant) -> f64 {
 }
 
 /// The scene's light in voxlod-cone's terms.
-fn cone_light(l: voxlod::scene::Light) -> Light {
+pub(super) fn cone_light(l: voxlod::scene::Light) -> Light {
     match l {
         voxlod::scene::Light::Directional { to_light, irradiance } => {
             Light::Directional { to_light, irradiance }
@@ -152,6 +158,7 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
     for &c in &args.cones {
         ensure!((1..=1024).contains(&c), "--cones {c}: in 1..=1024");
     }
+    super::cone_primary::check_args(&args)?;
     let spinner = ui.spinner();
     let say = |m: &str| spinner.set_message(m.to_string());
     let outcome = run(&args, &say)?;
@@ -248,6 +255,8 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
     }
     say("light leaking");
     let leaks = leak_experiment(&[5, 6, 7], &args.steps)?;
+    let primary =
+        if args.lod_scene == "none" { None } else { Some(super::cone_primary::run(args, say)?) };
     Ok(ConeOutcome {
         scene: args.scene.clone(),
         reference_noise_mse: noise,
@@ -255,6 +264,7 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
         octrees,
         rows,
         leaks,
+        primary,
     })
 }
 
@@ -452,7 +462,11 @@ fn tables(o: &ConeOutcome) -> Result<Vec<Table>> {
             Cell::Number(r.leak),
         ])?;
     }
-    Ok(vec![t, l])
+    let mut out = vec![t, l];
+    if let Some(p) = &o.primary {
+        out.push(super::cone_primary::table(p)?);
+    }
+    Ok(out)
 }
 
 fn make_report(o: &ConeOutcome) -> Result<Report> {
@@ -493,6 +507,14 @@ pub fn add_to_report(r: &mut Report, o: &ConeOutcome) -> Result<()> {
     ));
     for t in tables(o)? {
         r.table(t);
+    }
+    if let Some(p) = &o.primary {
+        r.text(super::cone_primary::summary(p));
+        r.images(
+            "cone_lod_images",
+            format!("{}: the mesh and the LOD march at each bias", p.scene),
+            super::cone_primary::image_grid(p),
+        );
     }
     let mut keys: Vec<(u32, u32, &str)> =
         o.rows.iter().map(|x| (x.resolution, x.aperture_deg as u32, x.opacity.as_str())).collect();

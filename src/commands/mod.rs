@@ -3,6 +3,7 @@
 
 mod compare;
 mod cone;
+mod cone_primary;
 mod info;
 mod render;
 mod report;

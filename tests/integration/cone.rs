@@ -26,6 +26,7 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         .args(["cone", "builtin:cornell", "--res", "8,16", "--cones", "1,6", "--apertures", "30"])
         .args(["--steps", "0.5", "--size", "16", "--spp", "16", "--json", "--quiet", "-o"])
         .arg(&dir)
+        .args(["--lod-scene", "none"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -55,6 +56,7 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         assert!((0.0..=1.0).contains(&f), "{l}");
     }
     assert!(dir.join("report.md").exists());
+    assert!(v["primary"].is_null());
     let _ = std::fs::remove_dir_all(&dir);
 
     for (args, needle) in [
@@ -84,5 +86,53 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         assert!(!out.status.success(), "{args:?} succeeded");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn cone_command_measures_primary_visibility_with_lod() {
+    let dir = std::env::temp_dir().join(format!("voxlod-cone-lod-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_voxlod"))
+        .args(["cone", "builtin:cornell", "--res", "8", "--cones", "1", "--apertures", "30"])
+        .args(["--steps", "1", "--size", "16", "--spp", "4", "--lod-scene", "builtin:bunny"])
+        .args(["--lod-res", "32", "--lod-size", "16", "--lod-spp", "4", "--lod-bias", "0,2"])
+        .args(["--lod-zoom-out", "4", "--json", "--quiet", "-o"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let p = &v["primary"];
+    let rows = p["rows"].as_array().unwrap();
+    // 2 opacity pre-filters × 2 biases.
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    for pair in rows.chunks(2) {
+        let (finest, lod) = (&pair[0], &pair[1]);
+        assert_eq!(finest["bias"], 0.0);
+        assert_eq!(finest["mse_finest"], 0.0);
+        assert!(finest["mse_truth"].as_f64().unwrap() > 0.0, "{finest}");
+        let s = |r: &serde_json::Value| r["samples_per_pixel"].as_f64().unwrap();
+        assert!(s(lod) < s(finest), "{lod} vs {finest}");
+    }
+    let [near, far] = [0, 1].map(|i| p["footprint_range"][i].as_f64().unwrap());
+    assert!(0.0 < near && near <= far, "{p}");
+    assert!(dir.join("assets/cone_lod_images.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+
+    for (extra, needle) in [
+        ("--lod-bias=-1", "--lod-bias -1"),
+        ("--lod-bias=nan", "--lod-bias NaN"),
+        ("--lod-res=12", "--lod-res 12"),
+        ("--lod-step=0", "--lod-step 0"),
+        ("--lod-zoom-out=0", "--lod-zoom-out 0"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_voxlod"))
+            .args(["cone", "builtin:cornell", "--quiet", extra])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{extra:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{extra:?}: {err}");
     }
 }

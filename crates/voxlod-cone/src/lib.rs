@@ -64,6 +64,7 @@ pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};
 pub use medium::{ConeMedium, RadianceLeaf, RadiancePayload};
 pub use primary::{
     PinholeCamera, PrimaryImage, PrimaryOptions, PrimaryPixel, PrimaryRenderer, ShadeInput,
+    SurfaceMedium,
 };
 pub use tracer::{ConeTracer, TraceOptions, specular_aperture};
 
