@@ -54,6 +54,7 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         seed: args.seed,
         ambient: Vec3::splat(0.1),
         shadows: true,
+        light_filter: None,
     };
     let (out, render_seconds) = match &gpu {
         None => {

@@ -134,6 +134,7 @@ pub(super) fn run_scene(
         seed,
         ambient: config.ambient,
         shadows: true,
+        light_filter: None,
     };
     let mut gt = Vec::new();
     let mut gt_noise = Vec::new();

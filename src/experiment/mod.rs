@@ -337,6 +337,7 @@ impl<'a> GroundTruths<'a> {
             seed: 0,
             ambient: self.ambient,
             shadows: true,
+            light_filter: None,
         };
         let mut images = Vec::new();
         for (i, camera) in self.views.iter().enumerate() {

@@ -42,6 +42,11 @@ fn volume_preset_writes_the_report_and_measures_the_trade() {
         let mse = row["metrics"]["mse"].as_f64().unwrap();
         assert!(mse > 0.0 && mse < 0.1, "{row}");
     }
+    // The mesh is rendered alone and, per model, again under the volume's shadow.
+    assert!(v["mesh_s"].as_f64().is_some_and(|s| s > 0.0), "{v}");
+    for row in att {
+        assert!(row["shadowed_mesh_s"].as_f64().is_some_and(|s| s > 0.0), "{row}");
+    }
     let sizes = v["sizes"].as_array().unwrap();
     assert_eq!(sizes.len(), 3);
     for row in sizes {

@@ -5,8 +5,10 @@
 //! 32×32 jittered grid) are averaged with equal weights: a box filter over the pixel. Each ray
 //! that hits is shaded alike (`surface.rs`): interpolated shading normal and UV, bilinear texture
 //! sample, double-sided materials facing the viewer, alpha masks and stochastic alpha blending,
-//! one shadow ray toward the scene's light (visibility 0 or 1), [`crate::shading::shade`] with
-//! the optional ambient term. A miss returns the scene's background colour.
+//! one shadow ray toward the scene's light (visibility 0 or 1), times the optional
+//! [`LightFilter`] of [`Options::light_filter`] (e.g. a participating medium's shadow:
+//! [`crate::volume::Volume`]), [`crate::shading::shade`] with the optional ambient term. A miss
+//! returns the scene's background colour.
 //!
 //! Output: a linear float [`Image`] whose RGB is the box-filtered radiance with the background
 //! composited in and whose alpha is the coverage (the fraction of rays that hit), and a
@@ -28,9 +30,28 @@ use super::{check_colour, check_image_size};
 use crate::raycast::Bvh;
 use crate::{Error, Result};
 
+/// An extra transmittance toward the light, per shading point: what lies between a surface
+/// point and the light that the mesh's shadow ray does not see, such as a participating
+/// medium (the procedural volume's shadow on the scene, [`crate::volume::Volume`] implements
+/// it with [`crate::volume::Volume::transmittance_to_light`]).
+///
+/// Closures `Fn(Vec3) -> f32 + Sync` implement it.
+pub trait LightFilter: Sync {
+    /// Transmittance in [0, 1] of the light reaching world point `p` (1: unfiltered). The
+    /// renderer clamps it into [0, 1] and reads NaN as 0.
+    fn transmittance(&self, p: Vec3) -> f32;
+}
+
+impl<F: Fn(Vec3) -> f32 + Sync> LightFilter for F {
+    #[inline]
+    fn transmittance(&self, p: Vec3) -> f32 {
+        self(p)
+    }
+}
+
 /// Options of [`render`]. Cost is linear in `width · height · spp`, about doubled by shadows.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
+#[derive(Clone, Copy)]
+pub struct Options<'a> {
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -44,11 +65,55 @@ pub struct Options {
     pub ambient: Vec3,
     /// Whether to trace shadow rays (off: every point sees the light).
     pub shadows: bool,
+    /// Extra light transmittance per shading point (`None`, the default: none, and the image
+    /// is bit for bit the one without this option). Where the light is above the shading
+    /// normal's horizon and the shadow ray (if traced) is not blocked, the direct light
+    /// (diffuse and specular, not the ambient term) is multiplied by
+    /// `filter.transmittance(position)` at the hit position, clamped into [0, 1] (NaN: 0).
+    /// Evaluated once per such camera-ray hit: its cost adds to each lit sample. The G-buffer
+    /// does not depend on it. The CPU renderer only: voxlod-gpu's kernel refuses it.
+    pub light_filter: Option<&'a dyn LightFilter>,
 }
 
-impl Default for Options {
+impl Default for Options<'_> {
     fn default() -> Self {
-        Self { width: 512, height: 512, spp: 1024, seed: 0, ambient: Vec3::ZERO, shadows: true }
+        Self {
+            width: 512,
+            height: 512,
+            spp: 1024,
+            seed: 0,
+            ambient: Vec3::ZERO,
+            shadows: true,
+            light_filter: None,
+        }
+    }
+}
+
+impl std::fmt::Debug for Options<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Options")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("spp", &self.spp)
+            .field("seed", &self.seed)
+            .field("ambient", &self.ambient)
+            .field("shadows", &self.shadows)
+            .field("light_filter", &self.light_filter.map(|_| "<LightFilter>"))
+            .finish()
+    }
+}
+
+/// Equal when every field is, the light filters being the same object (or both `None`).
+impl PartialEq for Options<'_> {
+    fn eq(&self, o: &Self) -> bool {
+        let filters = match (self.light_filter, o.light_filter) {
+            (None, None) => true,
+            (Some(a), Some(b)) => std::ptr::addr_eq(a as *const dyn LightFilter, b),
+            _ => false,
+        };
+        filters
+            && (self.width, self.height, self.spp, self.seed, self.ambient, self.shadows)
+                == (o.width, o.height, o.spp, o.seed, o.ambient, o.shadows)
     }
 }
 
@@ -113,14 +178,14 @@ pub fn render(
     camera: &Camera,
     options: &Options,
 ) -> Result<GroundTruth> {
-    let Options { width, height, spp, seed, ambient, shadows } = *options;
+    let Options { width, height, spp, seed, ambient, shadows, light_filter } = *options;
     check_options(options)?;
     camera.validate()?;
     let tracer = MeshTracer::new(scene, geometry, bvh)?;
     let frame = camera.frame(width, height);
     let streams = Streams::new(seed);
     let background = scene.background;
-    let lighting = Lighting { shadows, ambient };
+    let lighting = Lighting { shadows, ambient, filter: light_filter };
     let mut image = Image::new(width, height, Vec4::ZERO);
     let mut texels = vec![GTexel::default(); image.pixels.len()];
     let w = width as usize;

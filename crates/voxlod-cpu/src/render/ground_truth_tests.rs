@@ -43,7 +43,7 @@ fn pixel_of(cam: &Camera, size: u32, p: Vec3) -> (u32, u32) {
     (q.x as u32, q.y as u32)
 }
 
-fn opts(size: u32, spp: u32) -> Options {
+fn opts(size: u32, spp: u32) -> Options<'static> {
     Options { width: size, height: size, spp, ..Options::default() }
 }
 
@@ -285,4 +285,74 @@ fn bad_parameters_are_errors() {
     let mut dangling = g.clone();
     dangling.materials[0] = 7;
     assert!(render(&s, &dangling, &bvh, &cam, &ok).is_err());
+}
+
+/// FNV-1a over the bits of the image's pixels.
+fn image_hash(g: &GroundTruth) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for bits in g.image.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)) {
+        for byte in bits.to_le_bytes() {
+            h = (h ^ byte as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+#[test]
+fn without_a_light_filter_the_image_keeps_its_bits() {
+    // The hash of this render as it was before the light filter existed (commit adaf1fa):
+    // no filter must change no bit. Diffuse and blended materials only (no `powf`): apart
+    // from the camera's one `tan` (the platform's libm, here x86-64 glibc) the arithmetic is
+    // IEEE-exact, so the hash does not depend on the CPU; another libm may round that `tan`
+    // differently and then needs its own hash.
+    let glass = Material {
+        base_color: Vec4::new(0.2, 0.9, 0.3, 0.5),
+        alpha_mode: AlphaMode::Blend,
+        ..white()
+    };
+    let light = sun(Vec3::new(1.0, 0.3, 1.0), 3.0);
+    let s = scene(vec![plane(), occluder()], vec![white(), glass], light);
+    let cam = camera(Vec3::new(1.0, -2.0, 4.0), Vec3::ZERO);
+    let out = run(&s, &cam, &Options { seed: 42, ambient: Vec3::splat(0.05), ..opts(24, 16) });
+    assert_eq!(image_hash(&out), 0xd48f_6e30_abe2_e49b, "{:#x}", image_hash(&out));
+}
+
+#[test]
+fn a_light_filter_scales_the_lit_direct_light_only() {
+    // Light at 45° in x: the occluder's shadow falls on x ∈ [-1.5, -0.5]; no ambient, so a
+    // pixel is direct light only and a filter of 0.5 (a power of two: every product and sum
+    // scales exactly) halves every fully covered pixel bit for bit, the umbra staying 0.
+    let light = sun(Vec3::new(1.0, 0.0, 1.0), PI * 2f32.sqrt());
+    let s = scene(vec![plane(), occluder()], vec![white(), white()], light);
+    let cam = camera(Vec3::new(0.3, -0.4, 3.0), Vec3::ZERO);
+    let base = opts(20, 4);
+    let plain = run(&s, &cam, &base);
+    let with = |f: &dyn LightFilter| run(&s, &cam, &Options { light_filter: Some(f), ..base });
+    let half = with(&|_: Vec3| 0.5);
+    assert_eq!(half.gbuffer, plain.gbuffer, "the G-buffer does not depend on the filter");
+    let mut covered = 0;
+    for (h, p) in half.image.pixels.iter().zip(&plain.image.pixels) {
+        if p.w == 1.0 {
+            covered += 1;
+            assert_eq!(h.truncate(), p.truncate() * 0.5, "{h} vs {p}");
+        }
+    }
+    assert!(covered > 300, "{covered} covered pixels");
+    assert!(plain.image.pixels.iter().any(|p| p.w == 1.0 && p.x == 0.0), "an umbra is seen");
+    // Identity, and out-of-range answers clamped: > 1 is 1, < 0 and NaN are 0.
+    assert_eq!(with(&|_: Vec3| 1.0), plain);
+    assert_eq!(with(&|_: Vec3| 7.0), plain);
+    let dark = Options { shadows: false, ..base };
+    let black = run(&s, &cam, &Options { light_filter: Some(&|_: Vec3| 0.0), ..dark });
+    for f in [-3.0, f32::NAN] {
+        let out = run(&s, &cam, &Options { light_filter: Some(&move |_: Vec3| f), ..dark });
+        assert_eq!(out, black, "filter {f}");
+    }
+    assert!(black.image.pixels.iter().all(|p| p.truncate() == Vec3::ZERO));
+    // Evaluated at the hit position: a filter dark only for x > 0.5 leaves the rest unchanged.
+    let right = with(&|p: Vec3| if p.x > 0.5 { 0.25 } else { 1.0 });
+    let (x, y) = pixel_of(&cam, 20, Vec3::new(1.2, 0.3, 0.0));
+    assert_eq!(right.image.get(x, y).truncate(), plain.image.get(x, y).truncate() * 0.25);
+    let (x, y) = pixel_of(&cam, 20, Vec3::new(-0.2, 0.3, 0.0));
+    assert_eq!(right.image.get(x, y), plain.image.get(x, y));
 }

@@ -142,7 +142,7 @@ pub fn indirect_diffuse(
     let tracer = MeshTracer::new(scene, geometry, bvh)?;
     let streams = Streams::new(options.seed);
     let (k1, k2) = keys(options.seed);
-    let lighting = Lighting { shadows: true, ambient: Vec3::ZERO };
+    let lighting = Lighting { shadows: true, ambient: Vec3::ZERO, filter: None };
     Ok(per_pixel(gbuffer, |pixel, t| {
         let mut sum = Vec3::ZERO;
         for s in 0..options.spp {

@@ -13,6 +13,7 @@
 use glam::Vec3;
 use voxlod_scene::{AlphaMode, Geometry, Light, MaterialSample, Scene};
 
+use super::ground_truth::LightFilter;
 use super::sampling::Streams;
 use crate::random::rand_f32;
 use crate::raycast::{Bvh, Hit, offset_origin};
@@ -33,12 +34,14 @@ pub(crate) struct SurfacePoint {
 }
 
 /// The lighting switches of a render.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Lighting {
+#[derive(Clone, Copy)]
+pub(crate) struct Lighting<'f> {
     /// Whether to trace shadow rays.
     pub shadows: bool,
     /// Ambient term of `shade`.
     pub ambient: Vec3,
+    /// Extra transmittance toward the light, multiplying the shadow ray's visibility.
+    pub filter: Option<&'f dyn LightFilter>,
 }
 
 /// How a material's alpha filters hits.
@@ -164,7 +167,9 @@ impl<'a> MeshTracer<'a> {
 
     /// Outgoing radiance toward the camera ray `dir` at `s`: one light, one shadow ray (from
     /// the offset origin of [`offset_origin`]) when `shadows` is on and the light is above the
-    /// shading normal's horizon, and [`shade`] with `ambient`.
+    /// shading normal's horizon, the light filter's transmittance at `s.position` (clamped into
+    /// [0, 1], NaN as 0) where the light is above the horizon and not blocked, and [`shade`]
+    /// with `ambient`.
     #[inline]
     pub fn radiance(
         &self,
@@ -175,7 +180,7 @@ impl<'a> MeshTracer<'a> {
         streams: &Streams,
         lighting: Lighting,
     ) -> Vec3 {
-        let Lighting { shadows, ambient } = lighting;
+        let Lighting { shadows, ambient, filter } = lighting;
         let light = self.light.sample(s.position);
         let mut visibility = 1.0;
         if shadows && s.normal.dot(light.to_light) > 0.0 {
@@ -195,6 +200,14 @@ impl<'a> MeshTracer<'a> {
             if blocked {
                 visibility = 0.0;
             }
+        }
+        if let Some(filter) = filter
+            && visibility > 0.0
+            && s.normal.dot(light.to_light) > 0.0
+        {
+            let t = filter.transmittance(s.position);
+            // Into [0, 1], NaN (not ≥ 0) as 0 (`clamp` would keep the NaN).
+            visibility *= if t >= 0.0 { t.min(1.0) } else { 0.0 };
         }
         shade(&s.material, s.normal, -dir, &light, visibility, ambient)
     }

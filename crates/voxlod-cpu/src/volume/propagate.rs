@@ -19,13 +19,17 @@
 //! column's shadow is decided at its centre line.
 //!
 //! **Volume's shadow on the scene**: [`Volume::transmittance_to_light`] continues the stored
-//! per-column light (`light_top`) down to any point.
+//! per-column light (`light_top`) down to any point; `Volume` is a
+//! [`LightFilter`], so the ground-truth renderer takes it in
+//! [`crate::render::ground_truth::Options::light_filter`] and multiplies each shading point's
+//! direct light by it.
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::{Attenuation, BuildSettings, Metavoxel, Volume, VolumeSpec};
 use crate::raycast::Bvh;
+use crate::render::ground_truth::LightFilter;
 
 /// Mean over a voxel's depth of the light decaying as `e^(−τ s)`, `s ∈ [0, 1]`.
 #[inline]
@@ -147,5 +151,13 @@ impl Volume {
             return t;
         }
         1.0
+    }
+}
+
+/// The volume's shadow on the scene: [`Volume::transmittance_to_light`] at each shading point.
+impl LightFilter for Volume {
+    #[inline]
+    fn transmittance(&self, p: Vec3) -> f32 {
+        self.transmittance_to_light(p)
     }
 }

@@ -526,3 +526,99 @@ fn builds_and_renders_are_deterministic_across_thread_counts() {
     let many = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(run);
     assert_eq!(one, many);
 }
+
+/// A dense blob at (0, 0.3, 0) over a ground plane at y = −1 under a light from `to_light`:
+/// the volume (Beer–Lambert, density `density`), the scene and its BVH.
+fn blob_over_ground(
+    density: f32,
+    to_light: Vec3,
+) -> (Volume, voxlod_scene::Scene, voxlod_scene::Geometry, crate::raycast::Bvh) {
+    use crate::render::test_scenes::{scene, sun};
+    let spheres = [sphere(Vec3::new(0.0, 0.3, 0.0), 0.4, 0.1, density)];
+    let spec = spec(to_light, 2, 8);
+    let v =
+        build(&spheres, &map(), &spec, &settings(Attenuation::BeerLambert), None, None).unwrap();
+    let ground = quad("ground", Vec3::new(-2.0, -1.0, 2.0), Vec3::X * 4.0, Vec3::NEG_Z * 4.0, 0);
+    let white = voxlod_scene::Material::diffuse("white", Vec3::ONE);
+    let s = scene(vec![ground], vec![white], sun(to_light, 3.0));
+    let g = s.geometry();
+    let bvh = crate::raycast::Bvh::new(&g).unwrap();
+    (v, s, g, bvh)
+}
+
+#[test]
+fn volume_shadow_darkens_the_mesh_by_exactly_its_transmittance() {
+    use crate::render::ground_truth::{self, LightFilter, Options};
+    use crate::render::sampling::Streams;
+    use crate::render::surface::{Lighting, MeshTracer};
+    use crate::shading::shade;
+    let to_light = LIGHT.normalize();
+    let (v, s, g, bvh) = blob_over_ground(5.0, to_light);
+    let tracer = MeshTracer::new(&s, &g, &bvh).unwrap();
+    let streams = Streams::new(0);
+    let eye = Vec3::new(0.2, 3.0, 2.5);
+    let ambient = Vec3::splat(0.1);
+    // Under the blob (along the light from its centre to the ground) and far beside it.
+    let under = Vec3::new(0.0, 0.3, 0.0) - to_light * (1.3 / to_light.y);
+    let beside = Vec3::new(1.5, -1.0, 1.5);
+    let shaded = |p: Vec3, filter: Option<&dyn LightFilter>| {
+        let dir = (p - eye).normalize();
+        let sp = tracer.trace(eye, dir, 0, 0, &streams).expect("the ray hits the ground");
+        let lighting = Lighting { shadows: true, ambient, filter };
+        (sp, dir, tracer.radiance(&sp, dir, 0, 0, &streams, lighting))
+    };
+    let (sp, dir, dark) = shaded(under, Some(&v));
+    let (_, _, lit) = shaded(under, None);
+    let t = v.transmittance_to_light(sp.position);
+    assert!(t < 0.2, "under the blob: {t}");
+    let light = tracer.light.sample(sp.position);
+    assert_eq!(dark, shade(&sp.material, sp.normal, -dir, &light, t, ambient));
+    let direct = |r: Vec3| r - ambient; // white albedo
+    assert!((direct(dark) - direct(lit) * t).abs().max_element() < 1e-6, "{dark} vs {lit}·{t}");
+    let (sp, _, outside) = shaded(beside, Some(&v));
+    assert_eq!(v.transmittance_to_light(sp.position), 1.0, "beside the shadow");
+    assert_eq!(outside, shaded(beside, None).2);
+
+    // The whole render: darker under the blob, unchanged beside it.
+    let cam = Camera::look_at(eye, Vec3::new(0.0, -1.0, 0.0), Vec3::Y, 60.0);
+    let o = Options { width: 24, height: 24, spp: 4, ambient, ..Options::default() };
+    let plain = ground_truth::render(&s, &g, &bvh, &cam, &o).unwrap();
+    let shadowed =
+        ground_truth::render(&s, &g, &bvh, &cam, &Options { light_filter: Some(&v), ..o }).unwrap();
+    let frame = cam.frame(24, 24);
+    let px = |p: Vec3| {
+        let (q, _) = frame.project(p).unwrap();
+        (q.x as u32, q.y as u32)
+    };
+    let (x, y) = px(under);
+    assert!(shadowed.image.get(x, y).x < 0.5 * plain.image.get(x, y).x);
+    let (x, y) = px(beside);
+    assert_eq!(shadowed.image.get(x, y), plain.image.get(x, y));
+}
+
+#[test]
+fn volume_shadow_extremes_density_zero_and_a_million() {
+    use crate::render::ground_truth::{self, Options};
+    for to_light in [Vec3::Y, LIGHT.normalize(), Vec3::new(1.0, 1.0, -1.0).normalize()] {
+        let cam = Camera::look_at(Vec3::new(0.2, 3.0, 2.5), Vec3::NEG_Y, Vec3::Y, 60.0);
+        let ambient = Vec3::splat(0.1);
+        let o = Options { width: 16, height: 16, spp: 2, ambient, ..Options::default() };
+        let under = Vec3::new(0.0, 0.3, 0.0) - to_light * (1.3 / to_light.y);
+        // Density 0: factor exactly 1 everywhere, the same bits as without the filter.
+        let (v, s, g, bvh) = blob_over_ground(0.0, to_light);
+        assert_eq!(v.transmittance_to_light(under), 1.0);
+        let plain = ground_truth::render(&s, &g, &bvh, &cam, &o).unwrap();
+        let with = Options { light_filter: Some(&v), ..o };
+        assert_eq!(ground_truth::render(&s, &g, &bvh, &cam, &with).unwrap(), plain);
+        // Density 10⁶: factor ≈ 0, the point is lit by the ambient term only, nothing NaN.
+        let (v, s, g, bvh) = blob_over_ground(1e6, to_light);
+        let t = v.transmittance_to_light(under);
+        assert!((0.0..1e-6).contains(&t), "light {to_light}: {t}");
+        let with = Options { light_filter: Some(&v), ..o };
+        let out = ground_truth::render(&s, &g, &bvh, &cam, &with).unwrap();
+        assert!(out.image.pixels.iter().all(|p| p.is_finite()));
+        let (q, _) = cam.frame(16, 16).project(under).unwrap();
+        let p = out.image.get(q.x as u32, q.y as u32).truncate();
+        assert!((p - ambient).abs().max_element() < 1e-3, "light {to_light}: {p}");
+    }
+}

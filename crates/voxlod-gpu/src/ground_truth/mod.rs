@@ -212,7 +212,8 @@ impl<'a> GroundTruthKernel<'a> {
     /// Renders the uploaded scene from `camera`: what
     /// [`voxlod_cpu::render::ground_truth::render`] returns (linear RGB with the background
     /// composited, alpha = coverage, and the pixel-centre G-buffer), with the same errors for
-    /// bad options or camera.
+    /// bad options or camera; [`Error::Unsupported`] when `options.light_filter` is set (the
+    /// kernel cannot call a host-side filter; the CPU renderer takes it).
     pub fn render(
         &self,
         scene: &GpuScene,
@@ -220,7 +221,7 @@ impl<'a> GroundTruthKernel<'a> {
         options: &Options,
     ) -> Result<GroundTruth> {
         let ctx = self.ctx;
-        let Options { width, height, spp, seed, ambient, shadows } = *options;
+        let Options { width, height, spp, seed, ambient, shadows, light_filter: _ } = *options;
         // Only the option and camera checks can fail here: the scene was checked on upload.
         check(options, camera)?;
         let frame = camera.frame(width, height);
@@ -305,6 +306,13 @@ impl<'a> GroundTruthKernel<'a> {
 /// The option and camera checks of the CPU renderer.
 fn check(options: &Options, camera: &Camera) -> Result<()> {
     check_options(options)?;
+    if options.light_filter.is_some() {
+        // A host-side closure cannot run in the kernel: refuse rather than drop the shadow.
+        return Err(Error::Unsupported {
+            what: "a light filter (Options::light_filter) in the ground-truth kernel; render \
+                   with voxlod_cpu::render::ground_truth::render",
+        });
+    }
     camera.validate().map_err(voxlod_cpu::Error::from)?;
     Ok(())
 }
@@ -315,6 +323,18 @@ mod tests {
 
     use super::*;
     use crate::layout::assert_mirrors;
+
+    #[test]
+    fn a_light_filter_is_refused_not_ignored() {
+        let camera = Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0);
+        let plain = Options { width: 4, height: 4, spp: 1, ..Options::default() };
+        assert!(check(&plain, &camera).is_ok());
+        let half = |_: Vec3| 0.5;
+        let filtered = Options { light_filter: Some(&half), ..plain };
+        let err = check(&filtered, &camera).unwrap_err();
+        assert!(matches!(err, Error::Unsupported { .. }), "{err}");
+        assert!(err.to_string().contains("light filter"), "{err}");
+    }
 
     #[test]
     fn ground_truth_types_mirror_their_wgsl() {

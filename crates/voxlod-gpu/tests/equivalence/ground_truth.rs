@@ -25,7 +25,7 @@ use crate::images::{ImageBound, compare};
 const EXACT: ImageBound = ImageBound { per_pixel: 0, fraction: 1.0 };
 const GPU_BOUND: ImageBound = ImageBound { per_pixel: 1, fraction: 0.98 };
 
-fn scenes() -> Vec<(&'static str, Scene, Options)> {
+fn scenes() -> Vec<(&'static str, Scene, Options<'static>)> {
     let b = |name, kv: &[(&str, &str)]| {
         voxlod_scene::procedural::builtin(name, kv).expect("the builtin scene builds")
     };
