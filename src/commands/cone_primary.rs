@@ -147,6 +147,7 @@ pub fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<PrimaryOutcome> {
         seed,
         ambient: Vec3::splat(AMBIENT),
         shadows: true,
+        light_filter: None,
     };
     let t = Instant::now();
     let truth = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt_options(0))?;
