@@ -243,13 +243,7 @@ fn scenes_body(backend: &Backend, kind: RecordKind) -> Result<Measure, String> {
     } else {
         measures.push(shadow_control(bg, kind)?);
     }
-    let worst = measures.iter().map(|m| m.max_error).fold(0.0, f64::max);
-    Ok(Measure {
-        max_error: worst,
-        bound: measures[0].bound,
-        pass: measures.iter().all(|m| m.pass),
-        note: measures.iter().map(|m| m.note.as_str()).collect::<Vec<_>>().join(" | "),
-    })
+    Ok(Measure::combine(&measures))
 }
 
 /// A control on the CPU row: the sun case with and without shadows must differ by more than

@@ -132,13 +132,7 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
         };
         measures.push(m);
     }
-    let worst = measures.iter().map(|m| m.max_error).fold(0.0, f64::max);
-    Ok(Measure {
-        max_error: worst,
-        bound: measures[0].bound,
-        pass: measures.iter().all(|m| m.pass),
-        note: measures.iter().map(|m| m.note.as_str()).collect::<Vec<_>>().join(" | "),
-    })
+    Ok(Measure::combine(&measures))
 }
 
 pub fn backend_slug(backend: &Backend) -> String {

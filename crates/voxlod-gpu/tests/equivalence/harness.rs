@@ -55,6 +55,19 @@ pub struct Measure {
     pub note: String,
 }
 
+impl Measure {
+    /// One row from several comparisons (none empty): the worst error, the first one's
+    /// bound, a pass only if every one passes, and their notes joined.
+    pub fn combine(measures: &[Measure]) -> Measure {
+        Measure {
+            max_error: measures.iter().map(|m| m.max_error).fold(0.0, f64::max),
+            bound: measures[0].bound,
+            pass: measures.iter().all(|m| m.pass),
+            note: measures.iter().map(|m| m.note.as_str()).collect::<Vec<_>>().join(" | "),
+        }
+    }
+}
+
 struct Row {
     kernel: String,
     backend: String,

@@ -212,13 +212,7 @@ fn scenes_body(
             }
         }
     }
-    let worst = measures.iter().map(|m| m.max_error).fold(0.0, f64::max);
-    Ok(Measure {
-        max_error: worst,
-        bound: measures[0].bound,
-        pass: measures.iter().all(|m| m.pass),
-        note: measures.iter().map(|m| m.note.as_str()).collect::<Vec<_>>().join(" | "),
-    })
+    Ok(Measure::combine(&measures))
 }
 
 /// Shadows on vs off must differ by more than the GPU bound (see [`crate::filtered`]).
