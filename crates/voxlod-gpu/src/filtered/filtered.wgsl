@@ -331,14 +331,20 @@ fn vjk_f_inv(t_in: f32, gamma_in: f32) -> f32 {
 
 // Opacity::apply: the transmittance after crossing the voxel of record r over `chord` voxels.
 fn apply_opacity(t: f32, r: Record, chord: f32) -> f32 {
-    if is_vjk() {
-        let tau = max(r.a.w, 0.0) * max(chord, 0.0);
+    return apply_params(t, is_vjk(), vec2<f32>(r.a.w, r.b.w), chord);
+}
+
+// Opacity::apply from its parameters: the [VJK21] update with (σ, γ) = p when `vjk`, else
+// alpha p.x.
+fn apply_params(t: f32, vjk: bool, p: vec2<f32>, chord: f32) -> f32 {
+    if vjk {
+        let tau = max(p.x, 0.0) * max(chord, 0.0);
         if tau == 0.0 {
             return t;
         }
-        return min(t, vjk_f(vjk_f_inv(t, r.b.w) + tau, r.b.w));
+        return min(t, vjk_f(vjk_f_inv(t, p.y) + tau, p.y));
     }
-    return t * (1.0 - clamp(r.a.w, 0.0, 1.0));
+    return t * (1.0 - clamp(p.x, 0.0, 1.0));
 }
 
 // ---- SGGX shading (appearance/sggx.rs `shade_record`: 16 fixed VNDF samples).

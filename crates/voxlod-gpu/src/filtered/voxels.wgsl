@@ -57,14 +57,7 @@ fn opacity_of(tag: u32, dir: vec3<f32>) -> vec2<f32> {
 
 // Opacity::apply for a voxel of `kind` with parameters `p`.
 fn apply_kind(t: f32, kind: u32, p: vec2<f32>, chord: f32) -> f32 {
-    if kind == KIND_SGGX {
-        let tau = max(p.x, 0.0) * max(chord, 0.0);
-        if tau == 0.0 {
-            return t;
-        }
-        return min(t, vjk_f(vjk_f_inv(t, p.y) + tau, p.y));
-    }
-    return t * (1.0 - clamp(p.x, 0.0, 1.0));
+    return apply_params(t, kind == KIND_SGGX, p, chord);
 }
 
 @compute @workgroup_size(64)
