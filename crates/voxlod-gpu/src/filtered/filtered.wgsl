@@ -69,8 +69,7 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(F32_MAX));
 }
 
-// ---- The DDA of render/dda.rs (plain voxel stepping: brick skipping visits the same voxels
-// with bit-identical t, so it is left out; an empty brick costs one table load per voxel).
+// ---- The DDA of render/dda.rs, with its empty-space skipping (`walk_next`, below).
 
 struct Dda {
     origin: vec3<f32>,
@@ -85,6 +84,12 @@ struct Dda {
     // Outward normal of the face the current voxel was entered through (0: started inside).
     entry: vec3<i32>,
     done: bool,
+    // The brick of the last look-up and its ordinal (NONE: unallocated), as Dda's
+    // cached_brick / cached_index.
+    brick: vec3<i32>,
+    brick_index: u32,
+    // Iterations left: every loop of a walk is bounded by the voxels a ray can visit.
+    budget: u32,
 }
 
 fn plane(d: Dda, a: u32, k: i32) -> f32 {
@@ -143,6 +148,9 @@ fn dda_new(o: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> Dda {
     var s: Dda;
     s.dims = vec3<i32>(params.dims.xyz);
     s.done = true;
+    s.brick = vec3<i32>(-1);
+    s.brick_index = NONE;
+    s.budget = params.size.z;
     if !(finite3(o) && finite3(dir) && t_min <= t_max) {
         return s;
     }
@@ -242,25 +250,161 @@ fn dda_next(s: ptr<function, Dda>) -> Step {
     return out;
 }
 
-// ---- The voxel look-up of render/filtered/lookup.rs: dense brick table, linear masks, ranks.
+// ---- Empty-space skipping: Dda::next_occupied_voxel of render/dda.rs. Empty 8³ bricks and
+// empty 2³ blocks are crossed in one jump each; the exit planes come from the one plane
+// expression and the cell entered from the same tie rules, so the walk meets the voxels with
+// a record that plain stepping meets, with the same t and entry normals (proptested on the CPU).
 
-fn record_of(c: vec3<i32>) -> u32 {
-    let v = vec3<u32>(c);
-    let b = v / 8u;
+fn brick_at(b: vec3<i32>) -> u32 {
+    let u = vec3<u32>(b);
     let bd = params.brick_dims.xyz;
-    let bi = brick_table[b.x + bd.x * (b.y + bd.y * b.z)];
-    if bi == NONE {
-        return NONE;
+    return brick_table[u.x + bd.x * (u.y + bd.y * u.z)];
+}
+
+// Dda::next_crossing: the earliest plane crossing after `cell`, and the axes crossing there.
+struct Crossing {
+    t: f32,
+    axes: vec3<bool>,
+}
+
+fn next_crossing(d: Dda, cell: vec3<i32>) -> Crossing {
+    let ts = vec3<f32>(next_t(d, 0u, cell.x), next_t(d, 1u, cell.y), next_t(d, 2u, cell.z));
+    let t = min(min(ts.x, ts.y), ts.z);
+    return Crossing(t, ts == vec3<f32>(t));
+}
+
+fn axes_i(axes: vec3<bool>) -> vec3<i32> {
+    return select(vec3<i32>(0), vec3<i32>(1), axes);
+}
+
+// Dda::enter_at: into the cell of [lo, hi] holding the ray at t, crossed at t through the
+// planes of `axes` and of every axis whose entry plane lies exactly at t.
+fn enter_at(s: ptr<function, Dda>, t: f32, axes: vec3<bool>, lo: vec3<i32>, hi: vec3<i32>) {
+    let d = *s;
+    let cell = locate(d, t, lo, hi);
+    var entered = axes;
+    for (var a = 0u; a < 3u; a++) {
+        let st = d.step[a];
+        let enter = select(cell[a] + 1, cell[a], st > 0);
+        if st != 0 && plane(d, a, enter) == t {
+            entered[a] = true;
+        }
     }
-    let l = v % 8u;
-    let lin = l.x | (l.y << 3u) | (l.z << 6u);
-    let w = lin >> 5u;
-    let bit = lin & 31u;
-    let word = bricks[bi].mask[w];
-    if ((word >> bit) & 1u) == 0u {
-        return NONE;
+    (*s).cell = cell;
+    (*s).entry = normal_for(d, axes_i(entered));
+    (*s).t = t;
+}
+
+// Dda::skip_empty_bricks: from the unallocated brick `start`, brick by brick to the first
+// allocated one, entered where the ray enters it. False (walk ended) past the grid or t_end.
+fn skip_empty_bricks(s: ptr<function, Dda>, start: vec3<i32>) -> bool {
+    let bd = vec3<i32>(params.brick_dims.xyz);
+    var b = start;
+    // Each pass moves b one brick along the ray: at most bd.x + bd.y + bd.z passes.
+    for (var i = 0; i <= bd.x + bd.y + bd.z; i++) {
+        let d = *s;
+        let lo = b * 8;
+        let hi = min(lo + vec3<i32>(8), d.dims) - vec3<i32>(1);
+        let c = next_crossing(d, select(lo, hi, d.step > vec3<i32>(0)));
+        b += d.step * axes_i(c.axes);
+        if c.t >= d.t_end || any(b < vec3<i32>(0)) || any(b >= bd) {
+            break;
+        }
+        let index = brick_at(b);
+        if index == NONE {
+            continue;
+        }
+        let lo_b = b * 8;
+        enter_at(s, c.t, c.axes, lo_b, min(lo_b + vec3<i32>(8), d.dims) - vec3<i32>(1));
+        (*s).brick = b;
+        (*s).brick_index = index;
+        return true;
     }
-    return slots[bricks[bi].before[w] + countOneBits(word & ((1u << bit) - 1u))];
+    (*s).done = true;
+    return false;
+}
+
+// Dda::enter_brick: looks the current cell's brick up if it changed; skips it and every
+// following empty brick if it is unallocated.
+fn enter_brick(s: ptr<function, Dda>) -> bool {
+    let b = (*s).cell / 8; // cells are ≥ 0: division is the floor
+    if any(b != (*s).brick) {
+        (*s).brick = b;
+        (*s).brick_index = brick_at(b);
+        if (*s).brick_index == NONE {
+            return skip_empty_bricks(s, b);
+        }
+    }
+    return true;
+}
+
+// Dda::skip_block: leaves the empty 2³ block of the current cell into the cell the ray enters
+// at the block's exit; on the axes it does not exit, the side of the block's middle plane the
+// ray is on at that t (crossed at or before it: the far half, as locate decides).
+fn skip_block(s: ptr<function, Dda>) {
+    let d = *s;
+    let lo = (d.cell / 2) * 2;
+    let hi = min(lo + vec3<i32>(1), d.dims - vec3<i32>(1));
+    let up = d.step > vec3<i32>(0);
+    let exit_cell = select(lo, hi, up);
+    let c = next_crossing(d, exit_cell);
+    let next = exit_cell + d.step * axes_i(c.axes);
+    if c.t >= d.t_end || any(next < vec3<i32>(0)) || any(next >= d.dims) {
+        (*s).done = true;
+        return;
+    }
+    let parallel = d.step == vec3<i32>(0);
+    let mid = select((vec3<f32>(lo + vec3<i32>(1)) - d.origin) * d.inv, vec3<f32>(F32_MAX), parallel);
+    let t = vec3<f32>(c.t);
+    let near = select(lo + vec3<i32>(1), lo, up);
+    let inside = near + d.step * axes_i(mid <= t);
+    let stay = select(inside, d.cell, parallel);
+    (*s).cell = select(stay, next, c.axes);
+    (*s).entry = normal_for(d, axes_i(c.axes | (mid == t)));
+    (*s).t = c.t;
+}
+
+// A voxel with a record met by a walk, and the record's index (NONE: the walk ended).
+struct Hit {
+    step: Step,
+    index: u32,
+}
+
+// Dda::next_occupied_voxel + the rank look-up of render/filtered/lookup.rs: the next voxel
+// with a record. Inside an allocated brick the occupancy mask is tested per voxel visited;
+// a 2³ block with no occupied voxel (its 8 bits: 0x303 << ((x & 6) + 16·((y >> 1) & 1)) in
+// the words of its two z layers) is left in one jump.
+fn walk_next(s: ptr<function, Dda>) -> Hit {
+    var out: Hit;
+    out.index = NONE;
+    loop {
+        if (*s).done || (*s).budget == 0u {
+            break;
+        }
+        (*s).budget -= 1u;
+        if !enter_brick(s) {
+            break;
+        }
+        let bi = (*s).brick_index;
+        let l = vec3<u32>((*s).cell - (*s).brick * 8);
+        let lin = l.x | (l.y << 3u) | (l.z << 6u);
+        let w = lin >> 5u;
+        let bit = lin & 31u;
+        let word = bricks[bi].mask[w];
+        if ((word >> bit) & 1u) != 0u {
+            out.step = dda_next(s);
+            out.index = slots[bricks[bi].before[w] + countOneBits(word & ((1u << bit) - 1u))];
+            return out;
+        }
+        let bw = (l.y >> 2u) + 4u * (l.z >> 1u);
+        let block = (bricks[bi].mask[bw] | bricks[bi].mask[bw + 2u]) >> ((l.x & 6u) + 16u * ((l.y >> 1u) & 1u));
+        if (block & 0x303u) != 0u {
+            dda_next(s);
+        } else {
+            skip_block(s);
+        }
+    }
+    return out;
 }
 
 // ---- Per-voxel values (render/filtered/mod.rs `view`, `shadow`; appearance/averages.rs).
@@ -407,17 +551,17 @@ fn shadow(c: vec3<i32>, lit: Lit) -> f32 {
     let o = (centre_of(c) - params.grid.xyz) / size;
     var dda = dda_new(o, lit.light.to_light / size, 0.0, lit.distance);
     var t = 1.0;
-    for (var i = 0u; i < params.size.z && !dda.done; i++) {
-        let v = dda_next(&dda);
+    loop {
+        let h = walk_next(&dda);
+        if h.index == NONE {
+            break;
+        }
+        let v = h.step;
         let offset = v.voxel - c;
         if dot(offset, offset) <= SHADOW_SKIP_SQ {
             continue;
         }
-        let index = record_of(v.voxel);
-        if index == NONE {
-            continue;
-        }
-        t = apply_opacity(t, records[index], (v.t_exit - v.t_enter) * params.eye_grid.w);
+        t = apply_opacity(t, records[h.index], (v.t_exit - v.t_enter) * params.eye_grid.w);
         if t < MIN_TRANSMITTANCE {
             break;
         }
@@ -514,12 +658,13 @@ fn trace(dir: vec3<f32>) -> vec4<f32> {
     var dda = dda_new(params.eye_grid.xyz, dir / params.grid.w, 0.0, F32_MAX);
     var t = 1.0;
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < params.size.z && !dda.done; i++) {
-        let v = dda_next(&dda);
-        let index = record_of(v.voxel);
-        if index == NONE {
-            continue;
+    loop {
+        let h = walk_next(&dda);
+        if h.index == NONE {
+            break;
         }
+        let v = h.step;
+        let index = h.index;
         if params.size.w == 2u {
             return vec4<f32>(baseline_radiance(records[index], v, dir), 0.0);
         }

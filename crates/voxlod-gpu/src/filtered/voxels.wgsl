@@ -84,14 +84,15 @@ fn shadow_cached(c: vec3<i32>, lit: Lit) -> f32 {
     let o = (centre_of(c) - params.grid.xyz) / size;
     var dda = dda_new(o, lit.light.to_light / size, 0.0, lit.distance);
     var t = 1.0;
-    for (var i = 0u; i < params.size.z && !dda.done; i++) {
-        let v = dda_next(&dda);
+    loop {
+        let h = walk_next(&dda);
+        if h.index == NONE {
+            break;
+        }
+        let v = h.step;
+        let index = h.index;
         let offset = v.voxel - c;
         if dot(offset, offset) <= SHADOW_SKIP_SQ {
-            continue;
-        }
-        let index = record_of(v.voxel);
-        if index == NONE {
             continue;
         }
         let p = cache[2u * index + 1u].zw;
@@ -170,12 +171,13 @@ fn trace_cached(dir: vec3<f32>) -> vec4<f32> {
     var dda = dda_new(params.eye_grid.xyz, dir / params.grid.w, 0.0, F32_MAX);
     var t = 1.0;
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < params.size.z && !dda.done; i++) {
-        let v = dda_next(&dda);
-        let index = record_of(v.voxel);
-        if index == NONE {
-            continue;
+    loop {
+        let h = walk_next(&dda);
+        if h.index == NONE {
+            break;
         }
+        let v = h.step;
+        let index = h.index;
         let p = cache[2u * index + 1u].xy;
         let kind = kind_of(voxels[index].w);
         let next = apply_kind(t, kind, p, (v.t_exit - v.t_enter) * params.eye_grid.w);
