@@ -61,12 +61,16 @@ pub struct ReportArgs {
     /// Print the summary as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Where the images with a GPU kernel are rendered (gpu: the ground truth and every
+    /// representation's rows; each row says which backend rendered it).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
 }
 
 impl Default for ReportArgs {
     /// What `voxlod` with no command runs: the same defaults as `voxlod report`.
     fn default() -> Self {
-        Self { full: false, output: PathBuf::from("out"), json: false }
+        Self { full: false, output: PathBuf::from("out"), json: false, backend: BackendArg::Cpu }
     }
 }
 

@@ -197,10 +197,9 @@ fn intro(config: &Config) -> String {
 
 fn gpu_intro(k: &gpu::Kernels<'_>) -> String {
     format!(
-        " **Backend:** the images with a GPU kernel — the ground truth, the baseline, Averages \
-         and \\[VJK21\\] — were rendered on the GPU adapter {summary}; the virtual mesh and \
-         Adaptive have no GPU kernel and were rendered on the CPU. Every row's `backend` says \
-         which ({name} or cpu), and the times of GPU rows are times of the GPU path (upload and \
+        " **Backend:** the images with a GPU kernel — the ground truth, the baseline, Averages, \
+         \\[VJK21\\], the virtual mesh and Adaptive — were rendered on the GPU adapter \
+         {summary}. Every row's `backend` says which ({name} or cpu), and the times of GPU rows are times of the GPU path (upload and \
          pipeline compilation excluded){cpu_note}.",
         summary = k.summary,
         name = k.name,
