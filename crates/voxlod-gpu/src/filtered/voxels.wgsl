@@ -84,11 +84,7 @@ fn shadow_cached(c: vec3<i32>, lit: Lit) -> f32 {
     let o = (centre_of(c) - params.grid.xyz) / size;
     var dda = dda_new(o, lit.light.to_light / size, 0.0, lit.distance);
     var t = 1.0;
-    loop {
-        let h = walk_next(&dda);
-        if h.index == NONE {
-            break;
-        }
+    for (var h = walk_next(&dda); h.index != NONE; h = walk_next(&dda)) {
         let v = h.step;
         let index = h.index;
         let offset = v.voxel - c;
@@ -171,11 +167,7 @@ fn trace_cached(dir: vec3<f32>) -> vec4<f32> {
     var dda = dda_new(params.eye_grid.xyz, dir / params.grid.w, 0.0, F32_MAX);
     var t = 1.0;
     var sum = vec3<f32>(0.0);
-    loop {
-        let h = walk_next(&dda);
-        if h.index == NONE {
-            break;
-        }
+    for (var h = walk_next(&dda); h.index != NONE; h = walk_next(&dda)) {
         let v = h.step;
         let index = h.index;
         let p = cache[2u * index + 1u].xy;
