@@ -57,6 +57,7 @@ pub mod stats;
 pub mod topology;
 mod validate;
 
+pub use build::plan;
 pub use error::{Error, Result};
 pub use flat::{FlatOctree, GpuLevel, GpuNode, GpuTile};
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
