@@ -198,10 +198,18 @@ struct Growing {
 }
 
 impl Growing {
-    fn new(ctx: &Context, what: &'static str, stride: u64, capacity: u64) -> Result<Self> {
-        let capacity = capacity.max(1);
+    /// Room for `needed` entries (an error with the numbers if that is over the limit), and
+    /// up to `hint` if the limit allows.
+    fn new(ctx: &Context, what: &'static str, stride: u64, needed: u64, hint: u64) -> Result<Self> {
+        ctx.check_storage(what, needed * stride)?;
+        let capacity = hint.min(Self::limit(ctx, stride)).max(needed).max(1);
         let buffer = ctx.storage_zeroed(what, capacity * stride)?;
         Ok(Self { what, stride, capacity, buffer })
+    }
+
+    /// Most entries one binding holds.
+    fn limit(ctx: &Context, stride: u64) -> u64 {
+        ctx.limits().max_storage_buffer_binding_size.min(ctx.limits().max_buffer_size) / stride
     }
 
     /// Makes room for `needed` entries (keeping the first `used`), doubling, within the limit.
@@ -216,9 +224,7 @@ impl Growing {
             return Ok(());
         }
         ctx.check_storage(self.what, needed * self.stride)?;
-        let limit = ctx.limits().max_storage_buffer_binding_size.min(ctx.limits().max_buffer_size)
-            / self.stride;
-        let capacity = needed.max(2 * self.capacity).min(limit.max(needed));
+        let capacity = (2 * self.capacity).min(Self::limit(ctx, self.stride)).max(needed);
         let buffer = ctx.storage_zeroed(self.what, capacity * self.stride)?;
         if used > 0 {
             encoder.copy_buffer_to_buffer(&self.buffer, 0, &buffer, 0, used * self.stride);
@@ -465,8 +471,8 @@ impl<'a> OctreeBuilder<'a> {
         let mut keep = Vec::new();
         let coords_buf =
             ctx.storage_init("octree voxel coordinates", bytemuck::cast_slice(&coords))?;
-        let mut nodes = Growing::new(ctx, "octree nodes", 8, dense_nodes + 16 * n)?;
-        let mut tiles = Growing::new(ctx, "octree tiles", 12, 2 * n)?;
+        let mut nodes = Growing::new(ctx, "octree nodes", 8, dense_nodes, dense_nodes + 16 * n)?;
+        let mut tiles = Growing::new(ctx, "octree tiles", 12, 0, 2 * n)?;
         let table =
             |levels: &[GpuLevel]| ctx.storage_init("octree levels", bytemuck::cast_slice(levels));
 

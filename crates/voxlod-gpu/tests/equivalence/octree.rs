@@ -242,7 +242,40 @@ pub fn topology_scenes(backend: &Backend) -> Result<Measure, String> {
     }
     let mut m = exact(cases);
     m.note = format!("{} ({nodes} nodes)", m.note);
-    Ok(Measure::combine(&[m, control(&b)?]))
+    let mut measures = vec![m, control(&b)?];
+    if let (Backend::Gpu(ctx), Some(b)) = (backend, &b) {
+        measures.push(limits(ctx, b));
+    }
+    Ok(Measure::combine(&measures))
+}
+
+/// An over-limit request is an error with the numbers, before any GPU work: the dense levels
+/// of a 256³ tree stored densely down to its leaves (`dense_log2` 8: 19 173 961 nodes, 8 bytes
+/// each, 28 more for payloads) against the device's binding limit (128 MiB on lavapipe).
+fn limits(ctx: &voxlod_gpu::Context, b: &OctreeBuilder) -> Measure {
+    let limit = ctx.limits().max_storage_buffer_binding_size.min(ctx.limits().max_buffer_size);
+    let dense: u64 = (0..=8).map(|k| 1u64 << (3 * k)).sum();
+    let g = grid(UVec3::splat(256));
+    let o = opts(None, 8);
+    let voxels = with_payloads([UVec3::new(1, 2, 3)]);
+    let (what, bytes, result) = if dense * 8 > limit {
+        ("nodes", dense * 8, b.build_topology(&g, &[voxels[0].0], &o).map(|_| ()))
+    } else if dense * 28 > limit {
+        ("payloads", dense * 28, b.build(&g, &voxels, &o).map(|_| ()))
+    } else {
+        let note = format!("limits: {limit} bytes bind the largest dense tree; not checked");
+        return Measure { max_error: 0.0, bound: 0.0, pass: true, note };
+    };
+    let (pass, note) = match result {
+        Err(e @ voxlod_gpu::Error::BufferTooLarge { bytes: b, limit: l, .. })
+            if b == bytes && l == limit =>
+        {
+            (true, format!("limits: {e}"))
+        }
+        Err(e) => (false, format!("limits: {dense} dense nodes' {what}: wrong error {e}")),
+        Ok(()) => (false, format!("limits: {bytes} bytes of {what} over {limit} built")),
+    };
+    Measure { max_error: 0.0, bound: 0.0, pass, note }
 }
 
 /// The control: one voxel of the shell moved one step inwards must change the topology.
@@ -369,13 +402,14 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// The allocation step's exclusive prefix sum alone, exact, on sizes around the kernel's
-/// 512-value blocks and past 512² (three passes of block sums): 0/1 flags of varying density
+/// 512-value blocks, past 512² (three passes of block sums) and past one dispatch dimension: 0/1 flags of varying density
 /// and small counts. The CPU row runs the same block decomposition on the CPU (block scans,
 /// a scan of the block totals, the add pass) against the sequential oracle.
 pub fn prefix_sum(backend: &Backend) -> Result<Measure, String> {
     let b = builder(backend)?;
     let mut worst = (0u64, String::new());
-    let sizes = [1usize, 2, 511, 512, 513, 1024 + 7, 512 * 512, 512 * 512 + 1, 700_001];
+    // 65 535 · 64 + 1: the add pass's 2D dispatch split (x = 65 535, y = 2).
+    let sizes = [1usize, 2, 511, 512, 513, 1031, 512 * 512, 512 * 512 + 1, 700_001, 4_194_241];
     for (k, &n) in sizes.iter().enumerate() {
         let values: Vec<u32> = (0..n as u32)
             .map(|i| {
@@ -399,8 +433,11 @@ pub fn prefix_sum(backend: &Backend) -> Result<Measure, String> {
             worst = (bad, format!("{n} values: {bad} sums differ (total {total}, expected {acc})"));
         }
     }
-    let note =
-        if worst.0 == 0 { format!("{} sizes up to 700001, exact", sizes.len()) } else { worst.1 };
+    let note = if worst.0 == 0 {
+        format!("{} sizes up to 4194241 (2D dispatch), exact", sizes.len())
+    } else {
+        worst.1
+    };
     Ok(Measure { max_error: worst.0 as f64, bound: 0.0, pass: worst.0 == 0, note })
 }
 
