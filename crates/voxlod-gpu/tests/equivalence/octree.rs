@@ -242,7 +242,7 @@ pub fn topology_scenes(backend: &Backend) -> Result<Measure, String> {
     }
     let mut m = exact(cases);
     m.note = format!("{} ({nodes} nodes)", m.note);
-    let mut measures = vec![m, control(&b)?];
+    let mut measures = vec![m, bad_input(&b), control(&b)?];
     if let (Backend::Gpu(ctx), Some(b)) = (backend, &b) {
         measures.push(limits(ctx, b));
     }
@@ -276,6 +276,55 @@ fn limits(ctx: &voxlod_gpu::Context, b: &OctreeBuilder) -> Measure {
         Ok(()) => (false, format!("limits: {bytes} bytes of {what} over {limit} built")),
     };
     Measure { max_error: 0.0, bound: 0.0, pass, note }
+}
+
+/// Bad input (one fault per case, shuffled in among good voxels) gets the reference build's
+/// error, word for word: a voxel given twice (found on the GPU by two voxels reaching one
+/// leaf, named by the host), outside the grid, with a NaN payload; dense levels too large.
+fn bad_input(b: &Option<OctreeBuilder>) -> Measure {
+    let g = grid(UVec3::new(12, 7, 9));
+    let good = shell(7, 2.5);
+    let nan = AveragePayload::new(Vec3::ONE, Vec3::Z, f32::NAN);
+    let mut cases: Vec<(&str, Voxels, BuildOptions)> = Vec::new();
+    let mut dup = good.clone();
+    dup.extend([good[5], good[2]]);
+    cases.push(("duplicates", dup, opts(None, 1)));
+    let mut dup_dense = good.clone();
+    dup_dense.push(good[3]);
+    cases.push(("duplicate, all dense", dup_dense, opts(None, 6)));
+    let mut out = good.clone();
+    out.push((UVec3::new(3, 7, 1), payload(UVec3::ZERO)));
+    cases.push(("outside", out, opts(None, 1)));
+    let mut bad = good.clone();
+    bad[4].1 = nan;
+    cases.push(("NaN payload", bad, opts(None, 1)));
+    cases.push(("dense too large", good.clone(), opts(None, 9)));
+    let mut wrong = Vec::new();
+    for (k, (name, voxels, o)) in cases.iter().enumerate() {
+        let expected = Octree::build(g, voxels.iter().copied(), o).err().map(|e| e.to_string());
+        let voxels = shuffled(voxels.clone(), 7 + k as u32);
+        // The GPU's topology-only build takes no payloads: a payload fault is not its input.
+        let topology_only = if *name == "NaN payload" && b.is_some() {
+            expected.clone()
+        } else {
+            build(b, g, &voxels, o, false).err()
+        };
+        let with_payload = build(b, g, &voxels, o, true).err();
+        if expected.is_none() || topology_only != expected || with_payload != expected {
+            let actual = topology_only;
+            wrong.push(format!("{name}: {actual:?} / {with_payload:?}, expected {expected:?}"));
+        }
+    }
+    Measure {
+        max_error: wrong.len() as f64,
+        bound: 0.0,
+        pass: wrong.is_empty(),
+        note: if wrong.is_empty() {
+            format!("{} bad inputs get the reference's errors", cases.len())
+        } else {
+            wrong.join("; ")
+        },
+    }
 }
 
 /// The control: one voxel of the shell moved one step inwards must change the topology.
