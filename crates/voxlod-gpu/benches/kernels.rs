@@ -29,8 +29,10 @@
 //!   `Octree::build` + `FlatOctree::from_octree`, and the emulated lock-free build
 //!   `FlatOctree::build_level_by_level` (rayon, all cores); GPU: `OctreeBuilder::build_buffers`
 //!   (upload, build, no readback) and `OctreeBuilder::build` (with the readback). On lavapipe
-//!   these are CPU timings of the GPU path, and on this shared machine they were taken under
-//!   load.
+//!   these are CPU timings of the GPU path. First figures (2026-11-24, 2 cores shared with
+//!   four other builds, so load-dominated and noisy: the build without readback measured
+//!   slower than the one with it): reference/cpu 408 ms, level-by-level/cpu 471 ms,
+//!   gpu-path 2.09 s without and 1.35 s with the readback (criterion medians, 10 samples).
 //!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
