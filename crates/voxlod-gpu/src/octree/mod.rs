@@ -44,8 +44,8 @@
 //! and `prefilter` per level bottom-up (one invocation per node over its child tile).
 //!
 //! # On a real GPU
-//! The mark pass dominates: per level, 8 descents per voxel of `first_dense − l` dependent
-//! reads each. The eight invocations of one voxel sit in one warp and walk the same path
+//! Expected, not measured on one: the mark pass should dominate (per level, 8 descents per
+//! voxel of `first_dense − l` dependent reads each). The eight invocations of one voxel sit in one warp and walk the same path
 //! (the same cache lines; their flag writes hit at most 8 parents, usually 1–4), voxels in
 //! input order are spatially coherent if the input is (a Morton-sorted input makes whole warps
 //! walk shared paths), and divergence is limited to the `o ≥ d` test at the grid's lower
@@ -54,7 +54,9 @@
 //! passes read and write consecutive nodes and tiles in consecutive invocations (coalesced;
 //! link reads the parent level's child pointers at Morton-near addresses). The per-level read
 //! back of the tile count is a synchronization point per sparse level (≤ 21); allocating
-//! every level at its worst case instead would remove it at a large memory cost.
+//! every level at its worst case instead would remove it at a large memory cost. On lavapipe
+//! the 200 k-voxel shell of the `kernels` bench took 1.3–2.1 s under load, against 0.4 s for
+//! the CPU reference on the same loaded cores: CPU timings of the GPU path, not GPU speed.
 //!
 //! # Limits
 //! Every buffer is checked against the device's binding limit before it is allocated
