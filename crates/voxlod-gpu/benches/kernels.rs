@@ -23,6 +23,17 @@
 //!   path. Also the virtual mesh (Lines rule) and an Adaptive grid (τ = 0.08, errors from 64
 //!   held-out lines), whose GPU frames are the three passes of `filtered::voxels`.
 //!
+//! - `octree_build_shell256`: the octree of the sphere shell voxlod-octree's own bench builds
+//!   (~200 k voxels in 256³, radius 126, default options: dense down to 64³, two sparse
+//!   levels), Averages payloads, voxels in Morton order. CPU: the reference
+//!   `Octree::build` + `FlatOctree::from_octree`, and the emulated lock-free build
+//!   `FlatOctree::build_level_by_level` (rayon, all cores); GPU: `OctreeBuilder::build_buffers`
+//!   (upload, build, no readback) and `OctreeBuilder::build` (with the readback). On lavapipe
+//!   these are CPU timings of the GPU path. First figures (2026-11-24, 2 cores shared with
+//!   four other builds, so load-dominated and noisy: the build without readback measured
+//!   slower than the one with it): reference/cpu 408 ms, level-by-level/cpu 471 ms,
+//!   gpu-path 2.09 s without and 1.35 s with the readback (criterion medians, 10 samples).
+//!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
 use std::hint::black_box;
@@ -227,5 +238,60 @@ fn filtered(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, voxelize, raycast, ground_truth, filtered);
+/// The sphere shell of voxlod-octree's build bench: voxel centres within half a voxel of a
+/// sphere of radius 126 in 256³, Morton-sorted, radial normals, colour by position.
+fn shell256() -> Vec<(UVec3, voxlod_octree::AveragePayload)> {
+    let (res, radius) = (256u32, 126.0f32);
+    let c = Vec3::splat(res as f32 / 2.0);
+    let mut v = Vec::new();
+    for z in 0..res {
+        for y in 0..res {
+            for x in 0..res {
+                let p = Vec3::new(x as f32, y as f32, z as f32) + 0.5 - c;
+                if (p.length() - radius).abs() <= 0.5 {
+                    let colour = (p / radius) * 0.5 + 0.5;
+                    let payload = voxlod_octree::AveragePayload::new(colour, p, 0.8);
+                    v.push((UVec3::new(x, y, z), payload));
+                }
+            }
+        }
+    }
+    v.sort_unstable_by_key(|e| voxlod_format::morton::encode(e.0));
+    v
+}
+
+fn octree(c: &mut Criterion) {
+    use voxlod_octree::{BuildOptions, FlatOctree, Octree};
+    let ctx = context();
+    let voxels = shell256();
+    let grid =
+        GridSpec::new(glam::DVec3::ZERO, 1.0 / 256.0, UVec3::splat(256)).expect("valid grid");
+    let options = BuildOptions::default();
+    let mut group = c.benchmark_group("octree_build_shell256");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(voxels.len() as u64));
+    group.bench_function("reference/cpu", |b| {
+        b.iter(|| {
+            let tree = Octree::build(grid, voxels.iter().copied(), &options).unwrap();
+            black_box(FlatOctree::from_octree(&tree).unwrap())
+        })
+    });
+    group.bench_function("level-by-level/cpu", |b| {
+        b.iter(|| black_box(FlatOctree::build_level_by_level(grid, &voxels, &options).unwrap()))
+    });
+    if let Some(ctx) = &ctx {
+        let builder = voxlod_gpu::octree::OctreeBuilder::new(ctx).unwrap();
+        group.bench_function("level-by-level/gpu-path", |b| {
+            b.iter(|| {
+                black_box(builder.build_buffers(&grid, &voxels, &options).unwrap().node_count)
+            })
+        });
+        group.bench_function("level-by-level+readback/gpu-path", |b| {
+            b.iter(|| black_box(builder.build(&grid, &voxels, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, voxelize, raycast, ground_truth, filtered, octree);
 criterion_main!(benches);

@@ -11,6 +11,9 @@ pub enum Error {
     /// through the same host-side code: snapping, culling, BVH build).
     #[error(transparent)]
     Cpu(#[from] voxlod_cpu::Error),
+    /// Bad octree input, reported exactly as voxlod-octree's CPU builds report it.
+    #[error(transparent)]
+    Octree(#[from] voxlod_octree::Error),
     /// No wgpu adapter at all.
     #[error(
         "no GPU adapter found (wgpu enumerated none on Vulkan, Metal or DX12; on Linux without a GPU, \

@@ -11,6 +11,7 @@
 //! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
+//! | [`octree`]: the sparse voxel octree build, lock-free level by level (mark, prefix-sum allocation, links), Averages pre-filter | [`voxlod_octree::FlatOctree::build_level_by_level`], [`voxlod_octree::Octree::build`] | exact topology (levels, nodes, tiles, neighbours); payloads within `8·depth·2⁻²⁴`, see [`octree`] |
 //!
 //! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,
 //! so bad input gets the CPU path's errors; a GPU entry point never falls back to the CPU.
@@ -25,6 +26,7 @@ mod error;
 pub mod filtered;
 pub mod ground_truth;
 pub mod layout;
+pub mod octree;
 pub mod random;
 pub mod raycast;
 pub mod voxelize;

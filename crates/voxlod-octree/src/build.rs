@@ -214,8 +214,9 @@ impl<P: Payload> Octree<P> {
     }
 }
 
-/// Depth and finest dense level for a grid.
-pub(crate) fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
+/// Depth and finest dense level `(depth, first_dense)` of the octree over a grid of `dims`
+/// (the input checks every build shares, public so that other backends report the same errors).
+pub fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
     let needed = dims.max_element().next_power_of_two().trailing_zeros();
     let depth = options.depth.unwrap_or(needed);
     if depth > MAX_DEPTH {

@@ -17,8 +17,8 @@
 //!
 //! This crate depends on `voxlod-format` only (no GPU API, no scene crate), so another project
 //! can use it alone. Out of scope: merging virtual-mesh records across levels (open research,
-//! seed 000 §6), light injection and cone tracing (`voxlod-cone`), the wgpu kernel of the build (its
-//! algorithm is emulated and checked in [`flat`]).
+//! seed 000 §6), light injection and cone tracing (`voxlod-cone`), the wgpu kernel of the build
+//! (voxlod-gpu's `octree` module; its algorithm is emulated and checked in [`flat`]).
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
@@ -57,6 +57,7 @@ pub mod stats;
 pub mod topology;
 mod validate;
 
+pub use build::plan;
 pub use error::{Error, Result};
 pub use flat::{FlatOctree, GpuLevel, GpuNode, GpuTile};
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};

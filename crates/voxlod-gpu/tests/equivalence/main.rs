@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`]),
+//! [`voxels`], [`octree`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -15,6 +15,7 @@ mod filtered;
 mod ground_truth;
 mod harness;
 mod images;
+mod octree;
 mod random;
 mod raycast;
 mod voxelize;
@@ -55,6 +56,10 @@ fn equivalence_suite() {
         suite.run("filtered virtual mesh (proptest)", backend, voxels::vmesh_property);
         suite.run("filtered Adaptive (scenes)", backend, voxels::adaptive_scenes);
         suite.run("filtered Adaptive (proptest)", backend, voxels::adaptive_property);
+        suite.run("octree build topology (scenes)", backend, octree::topology_scenes);
+        suite.run("octree build Averages (scenes)", backend, octree::payload_scenes);
+        suite.run("octree build (proptest)", backend, octree::property);
+        suite.run("octree prefix sum (exact)", backend, octree::prefix_sum);
     }
     suite.finish();
 }
