@@ -25,6 +25,7 @@ mod error;
 pub mod filtered;
 pub mod ground_truth;
 pub mod layout;
+pub mod precompute;
 pub mod random;
 pub mod raycast;
 pub mod voxelize;
