@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`]),
+//! [`voxels`], [`precompute`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -15,6 +15,7 @@ mod filtered;
 mod ground_truth;
 mod harness;
 mod images;
+mod precompute;
 mod random;
 mod raycast;
 mod voxelize;
@@ -55,6 +56,11 @@ fn equivalence_suite() {
         suite.run("filtered virtual mesh (proptest)", backend, voxels::vmesh_property);
         suite.run("filtered Adaptive (scenes)", backend, voxels::adaptive_scenes);
         suite.run("filtered Adaptive (proptest)", backend, voxels::adaptive_property);
+        suite.run("precompute lines (scenes)", backend, precompute::lines_scenes);
+        suite.run("precompute voxels (scenes)", backend, precompute::voxels_scenes);
+        suite.run("precompute lines (proptest)", backend, precompute::lines_property);
+        suite.run("precompute voxels (proptest)", backend, precompute::voxels_property);
+        suite.run("precompute (dispatches)", backend, precompute::dispatches);
     }
     suite.finish();
 }
