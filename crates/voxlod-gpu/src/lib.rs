@@ -11,6 +11,7 @@
 //! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
+//! | [`precompute`]: the per-voxel ray sampler, Averages sums and opacity subgrid (opaque untextured materials) | [`voxlod_cpu::appearance::precompute::precompute`] with [`voxlod_cpu::appearance::averages::fit`], [`voxlod_cpu::appearance::subgrid::build`] | line cases exact but near-ties, record and subgrid bytes ±1, see [`precompute`] |
 //!
 //! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,
 //! so bad input gets the CPU path's errors; a GPU entry point never falls back to the CPU.

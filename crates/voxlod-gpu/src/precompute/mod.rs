@@ -307,7 +307,8 @@ impl<'a> Precomputer<'a> {
             let out_bytes = n as u64 * size_of::<GpuVoxelOut>() as u64;
             let out_buf = ctx.storage_zeroed("precompute results", out_bytes)?;
             let line_bytes =
-                if outputs.lines { line_count * size_of::<GpuLineOut>() as u64 } else { 4 };
+                // Without lines, one element: a binding holds at least one.
+                size_of::<GpuLineOut>() as u64 * if outputs.lines { line_count } else { 1 };
             let line_buf = ctx.storage_zeroed("precompute lines", line_bytes)?;
             let layout = self.pipeline.get_bind_group_layout(0);
             let mut first = 0u32;
