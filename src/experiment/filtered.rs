@@ -162,7 +162,9 @@ pub(super) fn run(
         let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
         let vox = voxelize::voxelize(inputs.geometry, &grid, &options)?;
         let ctx = SamplingContext::new(inputs.scene, inputs.geometry, &vox)?;
-        let built = build_all(&ctx, inputs.geometry, config, gpu, &|m| progress(&format!("{label}: {res}³: {m}")))?;
+        let built = build_all(&ctx, inputs.geometry, config, gpu, &|m| {
+            progress(&format!("{label}: {res}³: {m}"))
+        })?;
         drop(ctx);
         drop(vox);
 

@@ -76,7 +76,8 @@ use crate::raycast::entry;
 use crate::{Context, Error, Result};
 
 /// The WGSL source of the kernel: the RNG, then the sampler.
-pub const WGSL: &str = concat!(include_str!("../random/random.wgsl"), include_str!("precompute.wgsl"));
+pub const WGSL: &str =
+    concat!(include_str!("../random/random.wgsl"), include_str!("precompute.wgsl"));
 
 /// Invocations per workgroup (one workgroup per voxel).
 pub const WORKGROUP: u32 = 64;
@@ -395,7 +396,10 @@ impl<'a> Precomputer<'a> {
 
 /// The GPU materials of `scene`, or [`Error::Unsupported`] for textured or alpha materials.
 fn check_materials(scene: &Scene) -> Result<Vec<GpuMaterial>> {
-    if scene.materials.iter().any(|m| m.base_color_texture.is_some() || m.alpha_mode != AlphaMode::Opaque)
+    if scene
+        .materials
+        .iter()
+        .any(|m| m.base_color_texture.is_some() || m.alpha_mode != AlphaMode::Opaque)
     {
         return Err(Error::Unsupported {
             what: "textured or alpha-masked/blended materials in the GPU precompute (opaque \

@@ -90,7 +90,8 @@ fn oracle_voxel(c: &Case, i: usize, seed: u32) -> (VoxelSamples, Vec<(LineCase, 
     let inv = 1.0 / grid.voxel_size;
     let local = |p: Vec3| (p.as_dvec3() - min) * inv;
     let d = grid.dims;
-    let id = coord.x.wrapping_add(d.x.wrapping_mul(coord.y.wrapping_add(d.y.wrapping_mul(coord.z))));
+    let id =
+        coord.x.wrapping_add(d.x.wrapping_mul(coord.y.wrapping_add(d.y.wrapping_mul(coord.z))));
     let tris: Vec<_> = c
         .vox
         .triangles_of(i)
@@ -166,7 +167,8 @@ fn oracle_voxel(c: &Case, i: usize, seed: u32) -> (VoxelSamples, Vec<(LineCase, 
 
 fn oracle(c: &Case) -> Answer {
     let n = c.vox.voxels.len();
-    let mut out = Answer { lines: Vec::new(), records: Vec::new(), subgrids: Vec::new(), line_bits: None };
+    let mut out =
+        Answer { lines: Vec::new(), records: Vec::new(), subgrids: Vec::new(), line_bits: None };
     for i in 0..n {
         let (s, cases) = oracle_voxel(c, i, c.opts.seed);
         out.records.push(averages::fit(&s));
@@ -181,9 +183,15 @@ fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
     let opts = PrecomputeOptions { seed, ..c.opts };
     match backend {
         Backend::Cpu => {
-            let ctx = SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
+            let ctx =
+                SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
             let grid = precompute(&ctx, &opts, averages::fit).map_err(|e| e.to_string())?;
-            let mut out = Answer { lines: Vec::new(), records: Vec::new(), subgrids: Vec::new(), line_bits: None };
+            let mut out = Answer {
+                lines: Vec::new(),
+                records: Vec::new(),
+                subgrids: Vec::new(),
+                line_bits: None,
+            };
             let mut buf = VoxelSamples::default();
             for i in 0..ctx.voxel_count() {
                 ctx.sample_voxel_seeded(i, seed, 0, opts.rays, &mut buf);
@@ -215,7 +223,8 @@ fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
                     all += 1;
                     same += (bits(d) == bits(ray.dir)
                         && bits(e) == bits(ray.entry)
-                        && ch.to_bits() == ray.chord.to_bits()) as usize;
+                        && ch.to_bits() == ray.chord.to_bits())
+                        as usize;
                 }
             }
             Ok(Answer {
@@ -369,7 +378,11 @@ fn property_cases(count: u32) -> Vec<Case> {
     (0..count)
         .map(|k| {
             let r = |d: u32| rand_f32(0x9E37 + k, 11, d);
-            let dims = UVec3::new(2 + (r(0) * 6.0) as u32, 2 + (r(1) * 6.0) as u32, 2 + (r(2) * 5.0) as u32);
+            let dims = UVec3::new(
+                2 + (r(0) * 6.0) as u32,
+                2 + (r(1) * 6.0) as u32,
+                2 + (r(2) * 5.0) as u32,
+            );
             let size = 0.1 + 1.9 * r(3) as f64;
             let origin = (DVec3::new(r(4) as f64, r(5) as f64, r(6) as f64) - 0.5) * 20.0;
             let grid = GridSpec::new(origin, size, dims).expect("grid");
@@ -382,7 +395,8 @@ fn property_cases(count: u32) -> Vec<Case> {
                 let centre = o + Vec3::new(q(0), q(1), q(2)) * extent;
                 let scale = size as f32 * [0.3, 1.0, 3.0][(t % 3) as usize];
                 for v in 0..3 {
-                    let mut p = centre + (Vec3::new(q(3 + 3 * v), q(4 + 3 * v), q(5 + 3 * v)) - 0.5) * scale;
+                    let mut p = centre
+                        + (Vec3::new(q(3 + 3 * v), q(4 + 3 * v), q(5 + 3 * v)) - 0.5) * scale;
                     if t % 4 == 0 {
                         // On a voxel face: axis-aligned triangles at a grid plane.
                         let z = ((centre.z - o.z) / size as f32).round() * size as f32 + o.z;
@@ -405,7 +419,9 @@ fn property_cases(count: u32) -> Vec<Case> {
                 positions: positions[range.clone()].to_vec(),
                 normals: normals[range.clone()].to_vec(),
                 uvs: vec![Vec2::ZERO; range.len()],
-                indices: (0..range.len() as u32 / 3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+                indices: (0..range.len() as u32 / 3)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect(),
                 material,
                 ..Default::default()
             };
@@ -425,15 +441,18 @@ fn property_cases(count: u32) -> Vec<Case> {
                 ],
                 ..Default::default()
             };
-            let opts = PrecomputeOptions { rays: 1 + (r(8) * 200.0) as u32, seed: (r(9) * 1000.0) as u32 };
+            let opts =
+                PrecomputeOptions { rays: 1 + (r(8) * 200.0) as u32, seed: (r(9) * 1000.0) as u32 };
             case(format!("soup-{k}"), scene, grid, opts)
         })
         .collect()
 }
 
+/// Rows per (backend, case set): the lines and voxels rows share one run.
+type Cache = HashMap<(String, &'static str), Rc<Vec<Row>>>;
+
 thread_local! {
-    /// Rows per (backend, case set): the lines and voxels rows share one run.
-    static CACHE: RefCell<HashMap<(String, &'static str), Rc<Vec<Row>>>> = RefCell::default();
+    static CACHE: RefCell<Cache> = RefCell::default();
 }
 
 fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
@@ -441,7 +460,7 @@ fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
     if let Some(r) = CACHE.with(|c| c.borrow().get(&key).cloned()) {
         return Ok(r);
     }
-    let cases = if set == "scenes" { scene_cases() } else { property_cases(8) };
+    let cases = if set == "scenes" { scene_cases() } else { property_cases(16) };
     let mut out = Vec::new();
     for c in &cases {
         let o = oracle(c);
@@ -563,7 +582,11 @@ pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
 /// (CPU). Bad input: `rays = 0` gets the CPU's error word for word; a textured material is
 /// refused on the GPU. Exact.
 pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
-    let c = &scene_cases()[0];
+    // The bunny at 16³ with 64 lines: ~800 voxels, 22 dispatches of 37.
+    let bunny = scene_cases().swap_remove(0).scene;
+    let (lo, hi) = bunny.bounds().map_err(|e| e.to_string())?;
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 16).map_err(|e| e.to_string())?;
+    let c = &case("bunny-16".into(), bunny, grid, PrecomputeOptions { rays: 64, seed: 5 });
     let mut notes = Vec::new();
     let mut bad = 0usize;
     let zero = PrecomputeOptions { rays: 0, seed: 0 };
@@ -596,8 +619,9 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
             let bare = k
                 .run(&c.scene, &c.geometry, &c.vox, &c.opts, Outputs::default())
                 .map_err(|e| e.to_string())?;
-            let grid = voxlod_gpu::precompute::averages(gpu, &c.scene, &c.geometry, &c.vox, &c.opts)
-                .map_err(|e| e.to_string())?;
+            let grid =
+                voxlod_gpu::precompute::averages(gpu, &c.scene, &c.geometry, &c.vox, &c.opts)
+                    .map_err(|e| e.to_string())?;
             let same = base.averages.records.values() == split.averages.records.values()
                 && base.voxels == split.voxels
                 && base.samples == split.samples
@@ -633,7 +657,8 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
             // A bad voxelization (no triangle lists) gets the CPU's error.
             let mut bare = c.vox.clone();
             bare.triangles.clear();
-            let cpu_bare = SamplingContext::new(&c.scene, &c.geometry, &bare).map(|_| ()).unwrap_err();
+            let cpu_bare =
+                SamplingContext::new(&c.scene, &c.geometry, &bare).map(|_| ()).unwrap_err();
             let gpu_bare = k
                 .run(&c.scene, &c.geometry, &bare, &c.opts, Outputs::default())
                 .map(|_| ())
