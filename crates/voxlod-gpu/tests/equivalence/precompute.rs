@@ -3,7 +3,8 @@
 //! Oracle, shared by both backends: an independent `f64` sampler written here — the lines of
 //! `voxlod_cpu::appearance::sampler::sample_line` (the random-number contract, exact), each
 //! intersected with the voxel's triangles by Möller–Trumbore in `f64` on voxel-local `f64`
-//! vertices, the sampler's rules for cases (closed voxel box with the axis-aligned snap,
+//! vertices, the sampler's rules for cases (closed voxel box with the axis-aligned snap, which
+//! the sampler defines on the `f32`-rounded local vertices, so the oracle does too,
 //! world geometric normal for facing, double-sided flip), then voxlod-cpu's
 //! `averages::fit` and `subgrid::build` on those samples. The CPU reference row runs the CPU
 //! sampler and driver (`f32` hit tests set up in `f64`); the GPU rows run
@@ -134,9 +135,12 @@ fn oracle_voxel(c: &Case, i: usize, seed: u32) -> (VoxelSamples, Vec<(LineCase, 
             ray.occluded = true;
             result = (LineCase::Occluded, tri);
             let mut p = e + dd * t;
+            // The voxel-face tie rule is defined on the f32 local vertices (a triangle within
+            // f32 rounding of a voxel face lies on it): applied here the same way.
+            let (fa, fb, fc) = (a.as_vec3(), b.as_vec3(), cc.as_vec3());
             for j in 0..3 {
-                if a[j] == b[j] && a[j] == cc[j] {
-                    p[j] = a[j];
+                if fa[j] == fb[j] && fa[j] == fc[j] {
+                    p[j] = fa[j] as f64;
                 }
             }
             let inside = p.cmpge(DVec3::ZERO).all() && p.cmple(DVec3::ONE).all();
