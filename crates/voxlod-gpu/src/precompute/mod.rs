@@ -40,9 +40,11 @@
 //! are loaded 64 at a time into workgroup memory (one coalesced 5 KiB read) and every line
 //! tests the whole tile: all invocations of a workgroup run the same triangle loop, so the
 //! only divergence is the booking of a hit (about half the lines of a surface voxel) and the
-//! sub-cell loop (≤ 7 iterations). Each line costs about 60 flops of line set-up (PCG3D, the
-//! sine polynomial) and 20 per triangle; a voxel's loads are its tiles, once per stride, from
-//! cache. One thread per (voxel, line) instead would reload a voxel's triangles from memory
+//! sub-cell loop (≤ 7 iterations). A line costs its set-up (5 PCG3D calls, two degree-12
+//! polynomials, a square root, 3 divisions for the chord) and about 25 flops per triangle of
+//! its voxel; a voxel's loads are its tiles, once per stride, from cache. Workgroup memory is
+//! about 9.5 KiB (the tile, the 64 × 4 `vec4` reduction, the 54 sub-cell counters), so a GPU
+//! with 64 KiB per multiprocessor keeps 6 voxels (384 invocations) resident. One thread per (voxel, line) instead would reload a voxel's triangles from memory
 //! per line (no sharing without a workgroup) and need global atomics or a second pass for the
 //! per-voxel reductions; the workgroup keeps them in workgroup memory. Voxels are split into
 //! dispatches of at most [`VOXELS_PER_DISPATCH`] workgroups (a bound on a dispatch's duration,
@@ -58,7 +60,10 @@
 //! triangles at the same distance may then change case or triangle: the suite measures how
 //! many lines do (none on its scenes on llvmpipe) and bounds the fraction. The float sums are
 //! `f32` in a tree order where the CPU sums in `f64` in line order (about 1e-7 relative), so a
-//! record byte may round the other way: ±1 in each byte where every line agrees.
+//! record byte may round the other way: ±1 in each byte where every line agrees. Measured
+//! on llvmpipe (the suite's scenes and 16 random soups: 1.1 M lines, 7.7 k voxels): every
+//! line's direction, entry and chord equal the CPU's bit for bit, no line changes case, and
+//! every record and subgrid byte equals the CPU's.
 
 use glam::{DVec3, Vec3};
 use voxlod_cpu::appearance::AppearanceGrid;
