@@ -212,7 +212,8 @@ fn crossed_subcells(e: vec3<f32>, d: vec3<f32>, chord: f32) -> u32 {
     for (var j = 0u; j < 3u; j++) {
         if d[j] == 0.0 {
             let home = u32(clamp(i32(3.0 * e[j]), 0, 2));
-            let l = select(vec3<f32>(1e30), vec3<f32>(-1e30), vec3<u32>(0u, 1u, 2u) == vec3<u32>(home));
+            let is_home = vec3<u32>(0u, 1u, 2u) == vec3<u32>(home);
+            let l = select(vec3<f32>(1e30), vec3<f32>(-1e30), is_home);
             lo[j] = l;
             hi[j] = -l;
         } else {
@@ -243,9 +244,6 @@ fn crossed_subcells(e: vec3<f32>, d: vec3<f32>, chord: f32) -> u32 {
     return mask;
 }
 
-// The current tile of the voxel's triangles, shared by the workgroup's 64 lines.
-var<workgroup> tile: array<Tri, 64>;
-var<workgroup> tri_count: u32;
 var<workgroup> cell_rays: array<atomic<u32>, 27>;
 var<workgroup> cell_occluded: array<atomic<u32>, 27>;
 // Occluded lines, case-(a) lines, marked sub-cells.
@@ -271,10 +269,8 @@ fn main(
     if lid < 3u {
         atomicStore(&totals[lid], 0u);
     }
-    if lid == 0u {
-        tri_count = vox.count;
-    }
-    let count = workgroupUniformLoad(&tri_count);
+    let count = vox.count;
+    workgroupBarrier(); // the counters are zero
     let rays = params.counts.y;
     let base = params.seed.x;
     let write_lines = (params.counts.w & 1u) != 0u;
@@ -290,22 +286,16 @@ fn main(
         var best_u = 0.0;
         var best_v = 0.0;
         var best_k = NONE;
-        for (var c0 = 0u; c0 < count; c0 += WG) {
-            let n = min(WG, count - c0);
-            workgroupBarrier(); // the previous tile is consumed
-            if lid < n {
-                tile[lid] = tris[vox.first + c0 + lid];
-            }
-            workgroupBarrier();
-            for (var k = 0u; k < n; k++) {
-                let h = intersect(tile[k], line.e, line.d);
-                // Strictly closer: a tie keeps the earlier triangle (the lowest id).
-                if h.hit && (best_k == NONE || h.t < best_t) {
-                    best_t = h.t;
-                    best_u = h.u;
-                    best_v = h.v;
-                    best_k = c0 + k;
-                }
+        // Every invocation reads the same triangle at the same time: a uniform (broadcast)
+        // load, served from cache, with no workgroup memory and no barrier.
+        for (var k = 0u; k < count; k++) {
+            let h = intersect(tris[vox.first + k], line.e, line.d);
+            // Strictly closer: a tie keeps the earlier triangle (the lowest id).
+            if h.hit && (best_k == NONE || h.t < best_t) {
+                best_t = h.t;
+                best_u = h.u;
+                best_v = h.v;
+                best_k = k;
             }
         }
         // The tail invocations of the last stride only skip the booking (no barrier in it).
@@ -342,7 +332,8 @@ fn main(
                         // Geometry::interpolate's fallback: the unit geometric normal, else +z.
                         let g = cross(st.p1.xyz - st.p0.xyz, st.p2.xyz - st.p0.xyz);
                         let gl = sqrt(dot3(g, g));
-                        normal = select(vec3<f32>(0.0, 0.0, 1.0), g / gl, gl > 0.0 && 1.0 / gl <= F32_MAX);
+                        let ok = gl > 0.0 && 1.0 / gl <= F32_MAX;
+                        normal = select(vec3<f32>(0.0, 0.0, 1.0), g / gl, ok);
                     }
                     if double_sided && facing > 0.0 {
                         normal = -normal;
@@ -350,7 +341,8 @@ fn main(
                     let level = (m.specular.x + m.specular.y + m.specular.z) * ONE_THIRD_MEAN;
                     s0 += vec4<f32>(m.albedo.xyz, level);
                     s1 += vec4<f32>(normal, level * m.specular.w);
-                    s2 += vec4<f32>(normal.x * normal.x, normal.x * normal.y, normal.x * normal.z, normal.y * normal.y);
+                    let nx = normal.x * normal;
+                    s2 += vec4<f32>(nx, normal.y * normal.y);
                     s3 += vec4<f32>(normal.y * normal.z, normal.z * normal.z, 0.0, 0.0);
                     atomicAdd(&totals[1], 1u);
                     atomicOr(&totals[2], 1u << subcell_of(point));
@@ -377,19 +369,19 @@ fn main(
             }
         }
     }
-    // Tree reduction of the float sums, in a fixed order (deterministic).
+    // The float sums, added by invocation 0 in invocation order (deterministic): one barrier,
+    // where a tree would take six (each a costly coroutine switch on CPU implementations).
     red[lid * 4u] = s0;
     red[lid * 4u + 1u] = s1;
     red[lid * 4u + 2u] = s2;
     red[lid * 4u + 3u] = s3;
     workgroupBarrier();
-    for (var stride = WG / 2u; stride > 0u; stride >>= 1u) {
-        if lid < stride {
+    if lid == 0u {
+        for (var i = 1u; i < WG; i++) {
             for (var q = 0u; q < 4u; q++) {
-                red[lid * 4u + q] += red[(lid + stride) * 4u + q];
+                red[q] += red[i * 4u + q];
             }
         }
-        workgroupBarrier();
     }
     if lid == 0u {
         let marked = atomicLoad(&totals[2]);
