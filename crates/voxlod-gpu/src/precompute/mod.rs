@@ -49,9 +49,9 @@
 //! (voxel, line) instead would need global atomics or a second pass for the per-voxel
 //! reductions; one thread per voxel would leave a GPU idle below ~10⁵ voxels and make
 //! neighbouring lanes wait for the voxel with the most triangles. Voxels are split into
-//! dispatches of at most [`VOXELS_PER_DISPATCH`] workgroups (a bound on a dispatch's duration,
-//! which desktop drivers' watchdogs limit), each a 2D dispatch within
-//! `max_compute_workgroups_per_dimension`.
+//! dispatches of at most [`VOXELS_PER_DISPATCH`] workgroups and [`LINES_PER_DISPATCH`] lines
+//! (a bound on a dispatch's duration, which desktop drivers' watchdogs limit), each a 2D
+//! dispatch within `max_compute_workgroups_per_dimension`.
 //!
 //! On lavapipe (a CPU implementation) a workgroup is expensive in itself: the bunny at 32³
 //! (3253 voxels) took 0.7–0.9 s with 1 line per voxel and 1.7–2.2 s with 150, on 2 loaded
@@ -97,6 +97,10 @@ pub const WORKGROUP: u32 = 64;
 
 /// Voxels (workgroups) per dispatch, at most.
 pub const VOXELS_PER_DISPATCH: u32 = 1 << 14;
+
+/// Lines per dispatch, at most (fewer voxels per dispatch when a voxel has many lines; at
+/// least one voxel).
+pub const LINES_PER_DISPATCH: u64 = 1 << 22;
 
 /// The kernel's uniform parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -291,6 +295,14 @@ impl<'a> Precomputer<'a> {
             }
             .into());
         }
+        if opts.rays > u32::MAX - WORKGROUP {
+            // The kernel's stride over the lines must not wrap.
+            return Err(Error::TooLarge {
+                what: "lines per voxel",
+                requested: opts.rays as u64,
+                limit: (u32::MAX - WORKGROUP) as u64,
+            });
+        }
         let materials = check_materials(scene)?;
         let n = sampling.voxel_count();
         let rays = opts.rays;
@@ -327,7 +339,8 @@ impl<'a> Precomputer<'a> {
             let layout = self.pipeline.get_bind_group_layout(0);
             let mut first = 0u32;
             while (first as usize) < n {
-                let count = (n as u32 - first).min(self.voxels_per_dispatch);
+                let by_lines = (LINES_PER_DISPATCH / rays as u64).clamp(1, u32::MAX as u64) as u32;
+                let count = (n as u32 - first).min(self.voxels_per_dispatch).min(by_lines);
                 let x = count.min(self.dispatch_width);
                 let y = count.div_ceil(x);
                 let max = ctx.limits().max_compute_workgroups_per_dimension;

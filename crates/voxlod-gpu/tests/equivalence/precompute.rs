@@ -648,6 +648,16 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
                 bad += 1;
                 notes.push(format!("rays = 0: {err:?}, CPU {cpu_err:?}"));
             }
+            // Over the kernel's line count: an error with the numbers, before any GPU work.
+            let huge = PrecomputeOptions { rays: u32::MAX, seed: 0 };
+            match k.run(&c.scene, &c.geometry, &c.vox, &huge, Outputs::default()) {
+                Err(voxlod_gpu::Error::TooLarge { requested, .. })
+                    if requested == u32::MAX as u64 => {}
+                other => {
+                    bad += 1;
+                    notes.push(format!("rays = 2^32 − 1: {:?}", other.map(|_| ())));
+                }
+            }
             let mut textured = c.scene.clone();
             textured.materials[0].base_color_texture =
                 Some(voxlod_scene::TextureRef { texture: 0 });
