@@ -57,7 +57,10 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
     if gpu.is_some() {
         // The CPU run prints what it always did; a GPU run says which adapter rendered what.
         println!("backend: {backend_name}");
-        println!("(ground truth and every representation on the GPU: see each row's backend)");
+        println!(
+            "(ground truth and every representation rendered on the GPU, Averages also \
+             precomputed there: see each row's backend and 'precompute on')"
+        );
     }
     for scene in &outcome.scenes {
         if let Some(f) = &scene.filtered {

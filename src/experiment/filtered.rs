@@ -94,6 +94,12 @@ pub struct MethodRow {
     /// the JSON) in an all-CPU run, whose output is unchanged.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub backend: Option<String>,
+    /// What precomputed the row's records: the GPU adapter's short name (Averages, whose
+    /// precompute has a GPU kernel, unless the scene's materials are textured or alpha-tested,
+    /// which it refuses: then `cpu`), else `cpu`. None (and left out of the JSON) in an
+    /// all-CPU run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precompute_backend: Option<String>,
 }
 
 /// What the comparison of one scene produced.
@@ -119,6 +125,8 @@ struct Built {
     record_bytes: f64,
     memory_bytes: usize,
     precompute: Duration,
+    /// The GPU adapter that precomputed the records (None: the CPU).
+    precompute_gpu: Option<String>,
     mix: Option<[f64; 3]>,
 }
 
@@ -154,7 +162,9 @@ pub(super) fn run(
         let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
         let vox = voxelize::voxelize(inputs.geometry, &grid, &options)?;
         let ctx = SamplingContext::new(inputs.scene, inputs.geometry, &vox)?;
-        let built = build_all(&ctx, config, gpu, &|m| progress(&format!("{label}: {res}³: {m}")))?;
+        let built = build_all(&ctx, inputs.geometry, config, gpu, &|m| {
+            progress(&format!("{label}: {res}³: {m}"))
+        })?;
         drop(ctx);
         drop(vox);
 
@@ -186,10 +196,13 @@ pub(super) fn run(
 }
 
 /// Precomputes every representation from the same samples (each timed on its own: its
-/// precompute time is sampling plus its fit); with `gpu`, uploads the records that have a GPU
-/// kernel (untimed).
+/// precompute time is sampling plus its fit); with `gpu`, precomputes Averages on the adapter
+/// (`voxlod_gpu::precompute`, the same lines as the CPU's; the row names it) and uploads the
+/// records that have a GPU kernel (untimed). A scene whose materials the GPU precompute
+/// refuses (textured, alpha-tested) is precomputed on the CPU, and its row says `cpu`.
 fn build_all(
     ctx: &SamplingContext<'_>,
+    geometry: &Geometry,
     config: &FilteredConfig,
     gpu: Option<&SceneGpu<'_>>,
     progress: &dyn Fn(&str),
@@ -199,13 +212,32 @@ fn build_all(
 
     progress("Averages");
     let t = Instant::now();
-    let g = precompute(ctx, &opts, averages::fit)?;
+    let (g, precompute_gpu) = match gpu {
+        Some(k) => {
+            let run = k.kernels.precompute.run(
+                ctx.scene(),
+                geometry,
+                ctx.voxelization(),
+                &opts,
+                voxlod_gpu::precompute::Outputs::default(),
+            );
+            match run {
+                Ok(r) => (r.averages, Some(k.kernels.name.clone())),
+                Err(voxlod_gpu::Error::Unsupported { .. }) => {
+                    (precompute(ctx, &opts, averages::fit)?, None)
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        None => (precompute(ctx, &opts, averages::fit)?, None),
+    };
     let precompute_time = t.elapsed();
     built.push(Built {
         method: "Averages".into(),
         record_bytes: g.record_bytes() as f64,
         memory_bytes: g.memory_bytes(),
         precompute: precompute_time,
+        precompute_gpu,
         gpu: gpu.map(|k| k.kernels.filtered.upload_averages(&g)).transpose()?,
         grid: Box::new(g),
         mix: None,
@@ -220,6 +252,7 @@ fn build_all(
         record_bytes: g.record_bytes() as f64,
         memory_bytes: g.memory_bytes(),
         precompute: precompute_time,
+        precompute_gpu: None,
         gpu: gpu.map(|k| k.kernels.filtered.upload_vjk21(&g)).transpose()?,
         grid: Box::new(g),
         mix: None,
@@ -240,6 +273,7 @@ fn build_all(
             record_bytes: g.record_bytes() as f64,
             memory_bytes: g.memory_bytes(),
             precompute: precompute_vm,
+            precompute_gpu: None,
             gpu: gpu.map(|k| k.kernels.filtered.upload_virtual_mesh(&grid)).transpose()?,
             grid: Box::new(grid),
             mix: None,
@@ -260,6 +294,7 @@ fn build_all(
             record_bytes: g.record_bytes(),
             memory_bytes: g.memory_bytes(),
             precompute: candidates_time + t.elapsed(),
+            precompute_gpu: None,
             mix: Some(g.mix()),
             gpu: gpu.map(|k| k.kernels.filtered.upload_adaptive(&g)).transpose()?,
             grid: Box::new(g),
@@ -336,6 +371,7 @@ fn render_row(
             Some(_) => k.kernels.name.clone(),
             None => "cpu".into(),
         }),
+        precompute_backend: gpu.map(|_| b.precompute_gpu.clone().unwrap_or_else(|| "cpu".into())),
     };
     Ok((row, first.expect("at least one view")))
 }
@@ -414,6 +450,7 @@ impl FilteredResult {
             ];
             if with_backend {
                 columns.push(Column::text("backend"));
+                columns.push(Column::text("precompute on"));
             }
             let mut table = Table::new(format!("{label} filtered appearance {res}^3"), columns);
             for r in self.rows.iter().filter(|r| r.resolution == res) {
@@ -440,6 +477,8 @@ impl FilteredResult {
                 ];
                 if with_backend {
                     cells.push(Cell::Text(r.backend.clone().unwrap_or_else(|| "cpu".into())));
+                    let on = r.precompute_backend.clone().unwrap_or_else(|| "cpu".into());
+                    cells.push(Cell::Text(on));
                 }
                 table.push_row(cells)?;
             }

@@ -1,7 +1,9 @@
 //! The experiment on the GPU backend (`voxlod compare --backend gpu`): every image — the
 //! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
 //! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
-//! Every row says which backend rendered it. Nothing falls back silently: a scene the GPU
+//! Every row says which backend rendered it, and which precomputed its records: Averages is
+//! precomputed on the adapter too (`voxlod_gpu::precompute`), the other representations on the
+//! CPU. Nothing falls back silently: a scene the GPU
 //! ground truth refuses (textured or alpha-tested materials) is an error naming the scene.
 
 use glam::{DVec3, UVec3, Vec3};
@@ -40,6 +42,7 @@ pub(crate) struct Kernels<'c> {
     pub is_cpu: bool,
     pub ground_truth: GroundTruthKernel<'c>,
     pub filtered: FilteredKernel<'c>,
+    pub precompute: voxlod_gpu::precompute::Precomputer<'c>,
 }
 
 impl<'c> Kernels<'c> {
@@ -51,6 +54,7 @@ impl<'c> Kernels<'c> {
             is_cpu: ctx.is_cpu(),
             ground_truth: GroundTruthKernel::new(ctx)?,
             filtered: FilteredKernel::new(ctx)?,
+            precompute: voxlod_gpu::precompute::Precomputer::new(ctx)?,
         })
     }
 
@@ -83,7 +87,17 @@ impl<'c> Kernels<'c> {
         let options = baseline::Options { width: 1, height: 1, ..Default::default() };
         let light = scene.light();
         drop(self.filtered.render_baseline(&empty, &camera, &light, Vec3::ZERO, &options)?);
-        Ok(())
+        // The precompute on the scene in one voxel, one line (a scene it refuses is
+        // precomputed on the CPU, see `filtered::build_all`).
+        let geometry = scene.geometry();
+        let (lo, hi) = scene.bounds()?;
+        let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 1)?;
+        let vox = voxlod_cpu::voxelize::voxelize(&geometry, &grid, &Default::default())?;
+        let opts = voxlod_cpu::appearance::precompute::PrecomputeOptions { rays: 1, seed: 0 };
+        match self.precompute.run(scene, &geometry, &vox, &opts, Default::default()) {
+            Ok(_) | Err(voxlod_gpu::Error::Unsupported { .. }) => Ok(()),
+            Err(e) => Err(e.into()),
+        }
     }
 }
 

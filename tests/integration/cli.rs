@@ -311,6 +311,10 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
         assert_eq!((&c["method"], &c["image"]), (&g["method"], &g["image"]));
         let method = g["method"].as_str().unwrap();
         assert_eq!(g["backend"], adapter.as_str(), "{g}");
+        // Averages is precomputed on the adapter, the other representations on the CPU.
+        assert!(c.get("precompute_backend").is_none(), "{c}");
+        let on = if method == "Averages" { adapter.as_str() } else { "cpu" };
+        assert_eq!(g["precompute_backend"], on, "{g}");
         assert!(
             (ssim(g) - ssim(c)).abs() < 0.01,
             "{method} at {}²: SSIM {} on the GPU, {} on the CPU",

@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`]),
+//! [`voxels`], [`octree`], [`precompute`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -16,6 +16,7 @@ mod ground_truth;
 mod harness;
 mod images;
 mod octree;
+mod precompute;
 mod random;
 mod raycast;
 mod voxelize;
@@ -60,6 +61,11 @@ fn equivalence_suite() {
         suite.run("octree build Averages (scenes)", backend, octree::payload_scenes);
         suite.run("octree build (proptest)", backend, octree::property);
         suite.run("octree prefix sum (exact)", backend, octree::prefix_sum);
+        suite.run("precompute lines (scenes)", backend, precompute::lines_scenes);
+        suite.run("precompute voxels (scenes)", backend, precompute::voxels_scenes);
+        suite.run("precompute lines (proptest)", backend, precompute::lines_property);
+        suite.run("precompute voxels (proptest)", backend, precompute::voxels_property);
+        suite.run("precompute (dispatches)", backend, precompute::dispatches);
     }
     suite.finish();
 }

@@ -1,0 +1,688 @@
+//! Kernel 6, the per-voxel appearance precompute (ray sampling, Averages, opacity subgrid).
+//!
+//! Oracle, shared by both backends: an independent `f64` sampler written here — the lines of
+//! `voxlod_cpu::appearance::sampler::sample_line` (the random-number contract, exact), each
+//! intersected with the voxel's triangles by Möller–Trumbore in `f64` on voxel-local `f64`
+//! vertices, the sampler's rules for cases (closed voxel box with the axis-aligned snap, which
+//! the sampler defines on the `f32`-rounded local vertices, so the oracle does too,
+//! world geometric normal for facing, double-sided flip), then voxlod-cpu's
+//! `averages::fit` and `subgrid::build` on those samples. The CPU reference row runs the CPU
+//! sampler and driver (`f32` hit tests set up in `f64`); the GPU rows run
+//! `voxlod_gpu::precompute` with every line read back. Both are held to the same bounds:
+//!
+//! - **lines**: the fraction of lines whose case (miss / occluded / surface) or hit triangle
+//!   differs from the oracle, **bound 10⁻³**. Why not 0: the oracle decides in `f64`, the
+//!   backends in `f32` (and the GPU's division may be off by a few ULP, its multiply-adds
+//!   fused), so a line within ~1e-7 of a triangle edge, or two triangles' hits within ~1e-7
+//!   (a shared edge seen edge-on), may decide the other way. The note also gives the GPU's
+//!   lines that differ from the CPU reference's directly (measured: 0 on llvmpipe).
+//! - **voxels**: the fraction of voxels whose Averages record differs from the oracle's in
+//!   presence or by more than 1 in any byte (opacity, sRGB colour, snorm normal), or whose
+//!   subgrid differs by more than 1 in any byte, **bound 1 %**. Why 1 byte: the sums are `f32`
+//!   on the backends (`f64` in the oracle's fit) and may round a byte the other way; why 1 %:
+//!   one flipped line moves a voxel's opacity by 1/R (1.7 bytes at R = 150).
+//! - **controls** (one per row): the backend's lines with seed + 1 against the oracle of the
+//!   case's seed must exceed each bound tenfold (measured: about half the lines and nearly
+//!   every voxel differ), or the checks could not fail.
+//!
+//! Scenes: the bunny at 32³ (150 lines), a single-sided quad lying exactly on a voxel face
+//! (hits on the shared face are inside both voxels), a tilted double-sided quad (flipped
+//! normals, both sides sampled); the property rows: random triangle soups (some axis-aligned on
+//! voxel faces, some double-sided) in random grids, with random seeds and line counts.
+//! Plus: dispatch splitting and 2D dispatches give the same bits; bad input gets the CPU's
+//! error; textured materials are refused.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::rc::Rc;
+
+use glam::{DVec3, UVec3, Vec2, Vec3, Vec4};
+use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+use voxlod_cpu::appearance::sampler::{SamplingContext, dimension_base, sample_line};
+use voxlod_cpu::appearance::samples::{RaySample, SurfaceSample, VoxelSamples};
+use voxlod_cpu::appearance::{AppearanceGrid, averages, subgrid};
+use voxlod_cpu::random::rand_f32;
+use voxlod_cpu::voxelize::{Options, Voxelization, voxelize};
+use voxlod_format::GridSpec;
+use voxlod_format::records::AverageRecord;
+use voxlod_gpu::precompute::{LineCase, Outputs, Precomputer};
+use voxlod_scene::{Geometry, Material, Mesh, Scene};
+
+use crate::harness::{Backend, Measure};
+
+/// See the module docs.
+const LINE_BOUND: f64 = 1e-3;
+const VOXEL_BOUND: f64 = 0.01;
+
+/// One case: a scene voxelized, sampled with a seed and a line count.
+struct Case {
+    name: String,
+    scene: Scene,
+    geometry: Geometry,
+    vox: Voxelization,
+    opts: PrecomputeOptions,
+}
+
+fn case(name: String, scene: Scene, grid: GridSpec, opts: PrecomputeOptions) -> Case {
+    let geometry = scene.geometry();
+    let vox = voxelize(&geometry, &grid, &Options::default()).expect("voxelizes");
+    Case { name, scene, geometry, vox, opts }
+}
+
+/// A backend's (or the oracle's) answer for one case, in the voxelization's voxel order.
+struct Answer {
+    lines: Vec<Vec<(LineCase, u32)>>,
+    records: Vec<Option<AverageRecord>>,
+    subgrids: Vec<[u8; 27]>,
+    /// GPU only: lines whose direction, entry and chord equal `sample_line`'s bit for bit, of
+    /// all lines.
+    line_bits: Option<(usize, usize)>,
+}
+
+fn record_at(g: &AppearanceGrid<AverageRecord>, c: UVec3) -> Option<AverageRecord> {
+    g.records.index_of(c).map(|i| g.records.values()[i])
+}
+
+/// The oracle's lines of one voxel (module docs).
+fn oracle_voxel(c: &Case, i: usize, seed: u32) -> (VoxelSamples, Vec<(LineCase, u32)>) {
+    let grid = &c.vox.grid;
+    let coord = c.vox.voxels.coords().nth(i).expect("voxel");
+    let min = grid.voxel_min(coord);
+    let inv = 1.0 / grid.voxel_size;
+    let local = |p: Vec3| (p.as_dvec3() - min) * inv;
+    let d = grid.dims;
+    let id =
+        coord.x.wrapping_add(d.x.wrapping_mul(coord.y.wrapping_add(d.y.wrapping_mul(coord.z))));
+    let tris: Vec<_> = c
+        .vox
+        .triangles_of(i)
+        .iter()
+        .filter_map(|&t| {
+            let [a, b, cc] = c.geometry.triangle(t as usize);
+            let (la, lb, lc) = (local(a), local(b), local(cc));
+            let (e1, e2) = (lb - la, lc - la);
+            let area2 = e1.cross(e2).length_squared();
+            (area2 > 0.0).then_some((t, la, lb, lc, (b - a).cross(cc - a).as_dvec3()))
+        })
+        .collect();
+    let mut samples = VoxelSamples::default();
+    let mut cases = Vec::new();
+    for r in 0..c.opts.rays {
+        let (dir, entry, chord) = sample_line(id, r, dimension_base(seed));
+        let (e, dd) = (entry.as_dvec3(), dir.as_dvec3());
+        let mut best: Option<(f64, f64, f64, usize)> = None;
+        for (k, &(_, a, b, cc, _)) in tris.iter().enumerate() {
+            let (e1, e2) = (b - a, cc - a);
+            let p = dd.cross(e2);
+            let det = e1.dot(p);
+            if det == 0.0 {
+                continue;
+            }
+            let inv_det = 1.0 / det;
+            let tv = e - a;
+            let u = tv.dot(p) * inv_det;
+            let q = tv.cross(e1);
+            let v = dd.dot(q) * inv_det;
+            let t = e2.dot(q) * inv_det;
+            if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && best.is_none_or(|bt| t < bt.0) {
+                best = Some((t, u, v, k));
+            }
+        }
+        let mut ray = RaySample { dir, entry, chord, occluded: false, surface: None };
+        let mut result = (LineCase::Miss, u32::MAX);
+        if let Some((t, u, v, k)) = best {
+            let (tri, a, b, cc, ng) = tris[k];
+            ray.occluded = true;
+            result = (LineCase::Occluded, tri);
+            let mut p = e + dd * t;
+            // The voxel-face tie rule is defined on the f32 local vertices (a triangle within
+            // f32 rounding of a voxel face lies on it): applied here the same way.
+            let (fa, fb, fc) = (a.as_vec3(), b.as_vec3(), cc.as_vec3());
+            for j in 0..3 {
+                if fa[j] == fb[j] && fa[j] == fc[j] {
+                    p[j] = fa[j] as f64;
+                }
+            }
+            let inside = p.cmpge(DVec3::ZERO).all() && p.cmple(DVec3::ONE).all();
+            let material = c.geometry.materials[tri as usize];
+            let ds = c.scene.materials[material as usize].double_sided;
+            let facing = ng.dot(dd);
+            if inside && (ds || facing < 0.0) {
+                let (mut normal, uv) = c.geometry.interpolate(tri as usize, u as f32, v as f32);
+                if ds && facing > 0.0 {
+                    normal = -normal;
+                }
+                let m = c.scene.material_sample(material, uv);
+                ray.surface = Some(SurfaceSample {
+                    point: p.as_vec3(),
+                    normal,
+                    albedo: m.albedo,
+                    specular: (m.specular.x + m.specular.y + m.specular.z) * (1.0 / 3.0),
+                    shininess: m.shininess,
+                });
+                result.0 = LineCase::Surface;
+            }
+        }
+        samples.rays.push(ray);
+        cases.push(result);
+    }
+    (samples, cases)
+}
+
+fn oracle(c: &Case) -> Answer {
+    let n = c.vox.voxels.len();
+    let mut out =
+        Answer { lines: Vec::new(), records: Vec::new(), subgrids: Vec::new(), line_bits: None };
+    for i in 0..n {
+        let (s, cases) = oracle_voxel(c, i, c.opts.seed);
+        out.records.push(averages::fit(&s));
+        out.subgrids.push(subgrid::build(&s));
+        out.lines.push(cases);
+    }
+    out
+}
+
+/// The backend's answer for `c` sampled with `seed`.
+fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
+    let opts = PrecomputeOptions { seed, ..c.opts };
+    match backend {
+        Backend::Cpu => {
+            let ctx =
+                SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
+            let grid = precompute(&ctx, &opts, averages::fit).map_err(|e| e.to_string())?;
+            let mut out = Answer {
+                lines: Vec::new(),
+                records: Vec::new(),
+                subgrids: Vec::new(),
+                line_bits: None,
+            };
+            let mut buf = VoxelSamples::default();
+            for i in 0..ctx.voxel_count() {
+                ctx.sample_voxel_seeded(i, seed, 0, opts.rays, &mut buf);
+                out.subgrids.push(subgrid::build(&buf));
+                out.records.push(record_at(&grid, ctx.coord(i)));
+                out.lines.push(
+                    buf.rays
+                        .iter()
+                        // The CPU sampler does not report its hit triangle.
+                        .map(|r| (LineCase::of(r), u32::MAX))
+                        .collect(),
+                );
+            }
+            Ok(out)
+        }
+        Backend::Gpu(ctx) => {
+            let k = Precomputer::new(ctx).map_err(|e| e.to_string())?;
+            let r = k
+                .run(&c.scene, &c.geometry, &c.vox, &opts, Outputs { lines: true })
+                .map_err(|e| e.to_string())?;
+            let sampling =
+                SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
+            let (mut same, mut all) = (0, 0);
+            for (i, s) in r.samples.iter().flatten().enumerate() {
+                for (j, ray) in s.rays.iter().enumerate() {
+                    let (d, e, ch) =
+                        sample_line(sampling.voxel_id(i), j as u32, dimension_base(seed));
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    all += 1;
+                    same += (bits(d) == bits(ray.dir)
+                        && bits(e) == bits(ray.entry)
+                        && ch.to_bits() == ray.chord.to_bits())
+                        as usize;
+                }
+            }
+            Ok(Answer {
+                line_bits: Some((same, all)),
+                lines: r.cases.expect("asked for lines"),
+                records: c.vox.voxels.coords().map(|co| record_at(&r.averages, co)).collect(),
+                subgrids: r.voxels.iter().map(|v| v.subgrid).collect(),
+            })
+        }
+    }
+}
+
+/// Per case: (name, lines, lines off the oracle, GPU lines off the CPU, voxels, voxels off,
+/// worst record byte, worst subgrid byte, first difference).
+struct Row {
+    name: String,
+    lines: usize,
+    lines_off: usize,
+    voxels: usize,
+    voxels_off: usize,
+    worst_record: i32,
+    worst_subgrid: i32,
+    first: String,
+    /// GPU only: the direct comparison with the CPU reference.
+    note: String,
+}
+
+fn bytes(r: &AverageRecord) -> [i32; 7] {
+    [
+        r.opacity as i32,
+        r.color[0] as i32,
+        r.color[1] as i32,
+        r.color[2] as i32,
+        r.normal[0] as i32,
+        r.normal[1] as i32,
+        r.normal[2] as i32,
+    ]
+}
+
+fn compare(name: &str, a: &Answer, o: &Answer, compare_triangles: bool) -> Row {
+    let mut row = Row {
+        name: name.into(),
+        lines: 0,
+        lines_off: 0,
+        voxels: o.records.len(),
+        voxels_off: 0,
+        worst_record: 0,
+        worst_subgrid: 0,
+        first: String::new(),
+        note: String::new(),
+    };
+    for (v, (la, lo)) in a.lines.iter().zip(&o.lines).enumerate() {
+        row.lines += lo.len();
+        for (j, (x, y)) in la.iter().zip(lo).enumerate() {
+            let differs = x.0 != y.0 || (compare_triangles && x.1 != y.1);
+            if differs {
+                row.lines_off += 1;
+                if row.first.is_empty() {
+                    row.first = format!("voxel {v} line {j}: {x:?}, oracle {y:?}");
+                }
+            }
+        }
+    }
+    for v in 0..o.records.len() {
+        let rec = match (a.records[v], o.records[v]) {
+            (Some(x), Some(y)) => {
+                bytes(&x).iter().zip(bytes(&y)).map(|(p, q)| (p - q).abs()).max().unwrap()
+            }
+            (None, None) => 0,
+            _ => 255,
+        };
+        let sub = a.subgrids[v]
+            .iter()
+            .zip(&o.subgrids[v])
+            .map(|(&p, &q)| (p as i32 - q as i32).abs())
+            .max()
+            .unwrap();
+        row.worst_record = row.worst_record.max(rec);
+        row.worst_subgrid = row.worst_subgrid.max(sub);
+        if rec > 1 || sub > 1 {
+            row.voxels_off += 1;
+            if row.first.is_empty() {
+                row.first = format!(
+                    "voxel {v}: record {:?} vs oracle {:?}, subgrid Δ {sub}",
+                    a.records[v], o.records[v]
+                );
+            }
+        }
+    }
+    row
+}
+
+fn quad(corners: [Vec3; 4], double_sided: bool, color: Vec3) -> Scene {
+    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize();
+    Scene {
+        meshes: vec![Mesh {
+            name: "quad".into(),
+            positions: corners.to_vec(),
+            normals: vec![n; 4],
+            uvs: vec![Vec2::ZERO; 4],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            material: 0,
+            ..Default::default()
+        }],
+        materials: vec![Material {
+            base_color: color.extend(1.0),
+            double_sided,
+            specular: Vec3::splat(0.3),
+            shininess: 32.0,
+            ..Default::default()
+        }],
+        ..Default::default()
+    }
+}
+
+fn scene_cases() -> Vec<Case> {
+    let bunny = Scene::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj"),
+    )
+    .expect("the bunny asset loads");
+    let (lo, hi) = bunny.bounds().expect("bounds");
+    let bunny_grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 32).expect("grid");
+    let unit = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(4)).expect("grid");
+    let face = [
+        Vec3::new(0.5, 0.5, 2.0),
+        Vec3::new(3.5, 0.5, 2.0),
+        Vec3::new(3.5, 3.5, 2.0),
+        Vec3::new(0.5, 3.5, 2.0),
+    ];
+    let tilted = [
+        Vec3::new(0.3, 0.2, 1.1),
+        Vec3::new(3.7, 0.4, 1.9),
+        Vec3::new(3.6, 3.8, 2.9),
+        Vec3::new(0.2, 3.5, 2.2),
+    ];
+    let opts = PrecomputeOptions::default();
+    vec![
+        case("bunny-32".into(), bunny, bunny_grid, opts),
+        case("plane-on-face".into(), quad(face, false, Vec3::new(0.7, 0.2, 0.1)), unit, opts),
+        case(
+            "double-sided".into(),
+            quad(tilted, true, Vec3::new(0.1, 0.6, 0.3)),
+            unit,
+            PrecomputeOptions { rays: 200, seed: 3 },
+        ),
+    ]
+}
+
+/// Random soups in random grids (module docs), `count` cases from `seed`.
+fn property_cases(count: u32) -> Vec<Case> {
+    (0..count)
+        .map(|k| {
+            let r = |d: u32| rand_f32(0x9E37 + k, 11, d);
+            let dims = UVec3::new(
+                2 + (r(0) * 6.0) as u32,
+                2 + (r(1) * 6.0) as u32,
+                2 + (r(2) * 5.0) as u32,
+            );
+            let size = 0.1 + 1.9 * r(3) as f64;
+            let origin = (DVec3::new(r(4) as f64, r(5) as f64, r(6) as f64) - 0.5) * 20.0;
+            let grid = GridSpec::new(origin, size, dims).expect("grid");
+            let extent = dims.as_vec3() * size as f32;
+            let o = origin.as_vec3();
+            let tris = 1 + (r(7) * 30.0) as u32;
+            let mut positions = Vec::new();
+            for t in 0..tris {
+                let q = |d: u32| rand_f32(k * 1000 + t, 12, d);
+                let centre = o + Vec3::new(q(0), q(1), q(2)) * extent;
+                let scale = size as f32 * [0.3, 1.0, 3.0][(t % 3) as usize];
+                for v in 0..3 {
+                    let mut p = centre
+                        + (Vec3::new(q(3 + 3 * v), q(4 + 3 * v), q(5 + 3 * v)) - 0.5) * scale;
+                    if t % 4 == 0 {
+                        // On a voxel face: axis-aligned triangles at a grid plane.
+                        let z = ((centre.z - o.z) / size as f32).round() * size as f32 + o.z;
+                        p.z = z;
+                    }
+                    positions.push(p);
+                }
+            }
+            let normals: Vec<Vec3> = positions
+                .chunks(3)
+                .flat_map(|p| {
+                    let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
+                    [n, n, n]
+                })
+                .collect();
+            let n = positions.len();
+            let half = (tris / 2) as usize * 3;
+            let mesh = |range: std::ops::Range<usize>, material| Mesh {
+                name: "soup".into(),
+                positions: positions[range.clone()].to_vec(),
+                normals: normals[range.clone()].to_vec(),
+                uvs: vec![Vec2::ZERO; range.len()],
+                indices: (0..range.len() as u32 / 3)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect(),
+                material,
+                ..Default::default()
+            };
+            let mut meshes = vec![mesh(half..n, 1)];
+            if half > 0 {
+                meshes.insert(0, mesh(0..half, 0));
+            }
+            let scene = Scene {
+                meshes,
+                materials: vec![
+                    Material { base_color: Vec4::new(0.9, 0.5, 0.1, 1.0), ..Default::default() },
+                    Material {
+                        base_color: Vec4::new(0.2, 0.3, 0.9, 1.0),
+                        double_sided: true,
+                        ..Default::default()
+                    },
+                ],
+                ..Default::default()
+            };
+            let opts =
+                PrecomputeOptions { rays: 1 + (r(8) * 200.0) as u32, seed: (r(9) * 1000.0) as u32 };
+            case(format!("soup-{k}"), scene, grid, opts)
+        })
+        .collect()
+}
+
+/// Rows per (backend, case set): the lines and voxels rows share one run.
+type Cache = HashMap<(String, &'static str), Rc<Vec<Row>>>;
+
+thread_local! {
+    static CACHE: RefCell<Cache> = RefCell::default();
+}
+
+fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
+    let key = (backend.name(), set);
+    if let Some(r) = CACHE.with(|c| c.borrow().get(&key).cloned()) {
+        return Ok(r);
+    }
+    let cases = if set == "scenes" { scene_cases() } else { property_cases(16) };
+    let mut out = Vec::new();
+    for c in &cases {
+        let o = oracle(c);
+        let a = run(backend, c, c.opts.seed)?;
+        // The CPU sampler reports no triangle: only its cases are compared.
+        let tri = matches!(backend, Backend::Gpu(_));
+        let mut row = compare(&c.name, &a, &o, tri);
+        if let Backend::Gpu(_) = backend {
+            let cpu = run(&Backend::Cpu, c, c.opts.seed)?;
+            let direct = compare("gpu-vs-cpu", &a, &cpu, false);
+            let (same, all) = a.line_bits.unwrap_or_default();
+            row.note = format!(
+                "; GPU vs CPU: {} lines differ in case; {same} of {all} lines bit-identical",
+                direct.lines_off
+            );
+        }
+        out.push(row);
+    }
+    if set == "scenes" {
+        // Control: seed 1 against the oracle of the case's seed.
+        let c = &cases[0];
+        let o = oracle(c);
+        let a = run(backend, c, c.opts.seed + 1)?;
+        let mut row = compare("control", &a, &o, false);
+        row.name = "control (seed+1)".into();
+        out.push(row);
+    }
+    let rc = Rc::new(out);
+    CACHE.with(|c| c.borrow_mut().insert(key, rc.clone()));
+    Ok(rc)
+}
+
+fn lines_measure(rows: &[Row]) -> Measure {
+    let mut measures = Vec::new();
+    for r in rows {
+        let fraction = r.lines_off as f64 / r.lines.max(1) as f64;
+        if r.name.starts_with("control") {
+            let pass = fraction > 10.0 * LINE_BOUND;
+            measures.push(Measure {
+                max_error: 0.0,
+                bound: LINE_BOUND,
+                pass,
+                note: format!(
+                    "control, seed+1 vs the oracle must fail the bound: {:.1} % of lines differ",
+                    100.0 * fraction
+                ),
+            });
+        } else {
+            measures.push(Measure {
+                max_error: fraction,
+                bound: LINE_BOUND,
+                pass: fraction <= LINE_BOUND,
+                note: format!(
+                    "{}: {} of {} lines off{}{}",
+                    r.name,
+                    r.lines_off,
+                    r.lines,
+                    first(r),
+                    r.note
+                ),
+            });
+        }
+    }
+    Measure::combine(&measures)
+}
+
+fn first(r: &Row) -> String {
+    if r.first.is_empty() { String::new() } else { format!(" ({})", r.first) }
+}
+
+fn voxels_measure(rows: &[Row]) -> Measure {
+    let measures: Vec<Measure> = rows
+        .iter()
+        .map(|r| {
+            let fraction = r.voxels_off as f64 / r.voxels.max(1) as f64;
+            if r.name.starts_with("control") {
+                return Measure {
+                    max_error: 0.0,
+                    bound: VOXEL_BOUND,
+                    pass: fraction > 10.0 * VOXEL_BOUND,
+                    note: format!(
+                        "control, seed+1 vs the oracle must fail the bound: {:.1} % of voxels off",
+                        100.0 * fraction
+                    ),
+                };
+            }
+            Measure {
+                max_error: fraction,
+                bound: VOXEL_BOUND,
+                pass: fraction <= VOXEL_BOUND,
+                note: format!(
+                    "{}: {} of {} voxels off, worst Δ record {} subgrid {}",
+                    r.name, r.voxels_off, r.voxels, r.worst_record, r.worst_subgrid
+                ),
+            }
+        })
+        .collect();
+    Measure::combine(&measures)
+}
+
+pub fn lines_scenes(backend: &Backend) -> Result<Measure, String> {
+    Ok(lines_measure(&rows(backend, "scenes")?))
+}
+
+pub fn voxels_scenes(backend: &Backend) -> Result<Measure, String> {
+    Ok(voxels_measure(&rows(backend, "scenes")?))
+}
+
+pub fn lines_property(backend: &Backend) -> Result<Measure, String> {
+    Ok(lines_measure(&rows(backend, "property")?))
+}
+
+pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
+    Ok(voxels_measure(&rows(backend, "property")?))
+}
+
+/// Split dispatches (7 voxels each) and 2D dispatches (3 workgroups wide) give the same bits
+/// as one dispatch (GPU); the CPU driver on one thread gives the same bits as on the pool
+/// (CPU). Bad input: `rays = 0` gets the CPU's error word for word; a textured material is
+/// refused on the GPU. Exact.
+pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
+    // The bunny at 16³ with 64 lines: ~800 voxels, 22 dispatches of 37.
+    let bunny = scene_cases().swap_remove(0).scene;
+    let (lo, hi) = bunny.bounds().map_err(|e| e.to_string())?;
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 16).map_err(|e| e.to_string())?;
+    let c = &case("bunny-16".into(), bunny, grid, PrecomputeOptions { rays: 64, seed: 5 });
+    let mut notes = Vec::new();
+    let mut bad = 0usize;
+    let zero = PrecomputeOptions { rays: 0, seed: 0 };
+    let ctx = SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
+    let cpu_err = precompute(&ctx, &zero, averages::fit).map(|_| ()).unwrap_err().to_string();
+    match backend {
+        Backend::Cpu => {
+            let pool = precompute(&ctx, &c.opts, averages::fit).map_err(|e| e.to_string())?;
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .map_err(|e| e.to_string())?
+                .install(|| precompute(&ctx, &c.opts, averages::fit))
+                .map_err(|e| e.to_string())?;
+            bad += (pool.records.values() != one.records.values()) as usize;
+            notes.push(format!("{} records, 1 thread vs pool", pool.records.len()));
+        }
+        Backend::Gpu(gpu) => {
+            let k = Precomputer::new(gpu).map_err(|e| e.to_string())?;
+            let all = Outputs { lines: true };
+            let base =
+                k.run(&c.scene, &c.geometry, &c.vox, &c.opts, all).map_err(|e| e.to_string())?;
+            let split = Precomputer::new(gpu)
+                .map_err(|e| e.to_string())?
+                .with_voxels_per_dispatch(37)
+                .with_dispatch_width(5)
+                .run(&c.scene, &c.geometry, &c.vox, &c.opts, all)
+                .map_err(|e| e.to_string())?;
+            // Without the lines (another binding size), through the one-call entry point.
+            let bare = k
+                .run(&c.scene, &c.geometry, &c.vox, &c.opts, Outputs::default())
+                .map_err(|e| e.to_string())?;
+            let grid =
+                voxlod_gpu::precompute::averages(gpu, &c.scene, &c.geometry, &c.vox, &c.opts)
+                    .map_err(|e| e.to_string())?;
+            let same = base.averages.records.values() == split.averages.records.values()
+                && base.voxels == split.voxels
+                && base.samples == split.samples
+                && bare.voxels == base.voxels
+                && bare.samples.is_none()
+                && grid.records.values() == base.averages.records.values()
+                && grid.records.len() == base.averages.records.len();
+            bad += (!same) as usize;
+            notes.push(format!(
+                "{} voxels in dispatches of 37 as 5×8 workgroups, and without lines: {}",
+                base.voxels.len(),
+                if same { "same bits" } else { "DIFFER" }
+            ));
+            let err = k
+                .run(&c.scene, &c.geometry, &c.vox, &zero, Outputs::default())
+                .map(|_| ())
+                .unwrap_err()
+                .to_string();
+            if err != cpu_err {
+                bad += 1;
+                notes.push(format!("rays = 0: {err:?}, CPU {cpu_err:?}"));
+            }
+            // Over the kernel's line count: an error with the numbers, before any GPU work.
+            let huge = PrecomputeOptions { rays: u32::MAX, seed: 0 };
+            match k.run(&c.scene, &c.geometry, &c.vox, &huge, Outputs::default()) {
+                Err(voxlod_gpu::Error::TooLarge { requested, .. })
+                    if requested == u32::MAX as u64 => {}
+                other => {
+                    bad += 1;
+                    notes.push(format!("rays = 2^32 − 1: {:?}", other.map(|_| ())));
+                }
+            }
+            let mut textured = c.scene.clone();
+            textured.materials[0].base_color_texture =
+                Some(voxlod_scene::TextureRef { texture: 0 });
+            match k.run(&textured, &c.geometry, &c.vox, &c.opts, Outputs::default()) {
+                Err(voxlod_gpu::Error::Unsupported { .. }) => {}
+                other => {
+                    bad += 1;
+                    notes.push(format!("textured: {:?}", other.map(|_| ())));
+                }
+            }
+            // A bad voxelization (no triangle lists) gets the CPU's error.
+            let mut bare = c.vox.clone();
+            bare.triangles.clear();
+            let cpu_bare =
+                SamplingContext::new(&c.scene, &c.geometry, &bare).map(|_| ()).unwrap_err();
+            let gpu_bare = k
+                .run(&c.scene, &c.geometry, &bare, &c.opts, Outputs::default())
+                .map(|_| ())
+                .unwrap_err();
+            if gpu_bare.to_string() != cpu_bare.to_string() {
+                bad += 1;
+                notes.push(format!("no lists: {gpu_bare}, CPU {cpu_bare}"));
+            }
+        }
+    }
+    notes.push(format!("rays = 0: {cpu_err}"));
+    Ok(Measure { max_error: bad as f64, bound: 0.0, pass: bad == 0, note: notes.join("; ") })
+}
