@@ -11,6 +11,10 @@ pub enum Error {
     /// through the same host-side code: snapping, culling, BVH build).
     #[error(transparent)]
     Cpu(#[from] voxlod_cpu::Error),
+    /// Bad cone-tracing options or an octree the flat layout cannot index, reported exactly as
+    /// voxlod-cone reports them.
+    #[error(transparent)]
+    Cone(#[from] voxlod_cone::Error),
     /// No wgpu adapter at all.
     #[error(
         "no GPU adapter found (wgpu enumerated none on Vulkan, Metal or DX12; on Linux without a GPU, \

@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cone;
 pub mod context;
 mod error;
 pub mod filtered;
