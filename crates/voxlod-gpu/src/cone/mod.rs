@@ -363,7 +363,11 @@ pub struct ConeKernel<'a> {
 impl<'a> ConeKernel<'a> {
     /// The kernel (compiled when first used).
     pub fn new(ctx: &'a Context) -> Self {
-        Self { ctx, pipelines: [OnceCell::new(), OnceCell::new()], points_per_dispatch: POINTS_PER_DISPATCH }
+        Self {
+            ctx,
+            pipelines: [OnceCell::new(), OnceCell::new()],
+            points_per_dispatch: POINTS_PER_DISPATCH,
+        }
     }
 
     /// Sets the most shading points per dispatch (whole rows, at least one row): results do
@@ -388,7 +392,9 @@ impl<'a> ConeKernel<'a> {
         let ctx = self.ctx;
         let levels: &[GpuLevel] = &flat.levels;
         let nodes: &[GpuNode] = &flat.nodes;
-        let tiles: &[GpuTile] = &flat.tiles;
+        // A binding holds at least one element: an octree without sparse levels has no tiles.
+        let none = [GpuTile { links: [voxlod_octree::NONE; 3] }];
+        let tiles: &[GpuTile] = if flat.tiles.is_empty() { &none } else { &flat.tiles };
         Ok(GpuConeOctree {
             levels: ctx.storage_init("octree levels", bytemuck::cast_slice(levels))?,
             nodes: ctx.storage_init("octree nodes", bytemuck::cast_slice(nodes))?,
@@ -453,10 +459,7 @@ impl<'a> ConeKernel<'a> {
         let mut first = 0;
         while first < height {
             let rows = rows_per.min(height - first);
-            let p = GpuConeParams {
-                tree: [params.tree[0], params.tree[1], first, rows],
-                ..params
-            };
+            let p = GpuConeParams { tree: [params.tree[0], params.tree[1], first, rows], ..params };
             let uniform = ctx.uniform("cone params", bytemuck::bytes_of(&p))?;
             let bind = ctx.guarded("binding cone-tracing buffers", || {
                 ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
@@ -522,7 +525,12 @@ impl<'a> ConeKernel<'a> {
             grid: origin.extend(voxel).to_array(),
             size: [width, count, query.bits(), o.diffuse_cones],
             tree: [tree.depth, tree.first_dense, 0, 0],
-            march: [o.start_voxels, o.step_factor, o.opacity_cutoff, o.normal_offset_voxels * voxel],
+            march: [
+                o.start_voxels,
+                o.step_factor,
+                o.opacity_cutoff,
+                o.normal_offset_voxels * voxel,
+            ],
             limits: [
                 two_tan,
                 finite(o.max_distance / voxel),
@@ -608,7 +616,10 @@ mod tests {
             &iso,
             "Payload",
             size_of::<R>(),
-            &[("radiance_alpha", offset_of!(R, radiance_alpha)), ("opacity", offset_of!(R, opacity))],
+            &[
+                ("radiance_alpha", offset_of!(R, radiance_alpha)),
+                ("opacity", offset_of!(R, opacity)),
+            ],
         );
         type D = GpuDirectionalRadiance;
         assert_mirrors(
