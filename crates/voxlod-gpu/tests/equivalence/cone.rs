@@ -224,7 +224,11 @@ fn random_case(seed: u32) -> Case {
         normal_offset_voxels: 2.0 * r(0, 33),
         start_voxels: 2.0 * r(0, 34),
         ao_radius: (0.05 + r(0, 35)) * extent,
-        max_distance: if seed % 3 == 0 { (0.2 + r(0, 36)) * extent } else { f32::INFINITY },
+        max_distance: if seed.is_multiple_of(3) {
+            (0.2 + r(0, 36)) * extent
+        } else {
+            f32::INFINITY
+        },
         opacity_cutoff: [0.99, 1.0, 0.5][seed as usize % 3],
     };
     let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
