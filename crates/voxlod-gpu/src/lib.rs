@@ -11,6 +11,7 @@
 //! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
+//! | [`cone`]: cone tracing from shading points (AO, diffuse, specular) through a flat radiance octree, isotropic or directional opacities | [`voxlod_cone::ConeTracer`] | per-point bound on AO and radiance, see [`cone`] |
 //!
 //! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,
 //! so bad input gets the CPU path's errors; a GPU entry point never falls back to the CPU.

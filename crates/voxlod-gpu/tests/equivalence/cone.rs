@@ -21,7 +21,8 @@
 //!   opacity is scaled by the distance left). One sample of one of `n` cones moves `E/π` by at
 //!   most its weight over `n`, hence the fraction and the hard cap rather than a bound on
 //!   every point. The note gives the measured worst error, the points over 1e-3 and the
-//!   points whose sample count differs.
+//!   points whose sample count differs. Measured on lavapipe (Mesa 22.3.6): worst 9.0e-6 on
+//!   the scenes, 1.2e-6 on the random cases, no point over 1e-3, no sample count differing.
 //! - **Control row**: the same check against a CPU reference traced with `step_factor` 5 %
 //!   larger must FAIL (more than 1 % of the points over the bound): the check sees a change
 //!   of the march that small.
