@@ -209,6 +209,11 @@ pub struct ConeArgs {
     /// Image side in pixels.
     #[arg(long, default_value_t = 64)]
     pub size: u32,
+    /// Where the cones of the sweep are traced: cpu (rayon, the reference) or gpu (the wgpu
+    /// kernel, on the adapter `VOXLOD_ADAPTER` selects; no adapter is an error). The G-buffer,
+    /// references, octrees, leak experiment and LOD section stay on the CPU.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Rays per pixel of the ray-traced references.
     #[arg(long, default_value_t = 256)]
     pub spp: u32,

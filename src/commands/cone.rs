@@ -10,6 +10,11 @@
 //! against the references (`voxlod_cpu::render::indirect`, `--spp`
 //! rays, seed 0; seed 1 measures the references' own noise).
 //!
+//! `--backend gpu` traces the sweep's cones with voxlod-gpu's cone kernel (the same AO and
+//! `E/π` per pixel as the CPU's `ConeTracer::ao_and_diffuse`, checked by the equivalence
+//! suite) and prints the adapter; its trace times are the kernel's (upload of the shading
+//! points, dispatches, readback), on lavapipe CPU times of the GPU path.
+//!
 //! Then, unless `--lod-scene none`, primary visibility with level of detail by distance on
 //! `--lod-scene` (`cone_primary`): error, samples and time per LOD bias against the
 //! finest-level march and the ground-truth mesh render.
@@ -29,12 +34,13 @@ use voxlod::cpu::render::indirect;
 use voxlod::cpu::voxelize;
 use voxlod::eval::report::{Cell, Column, NumberFormat, Plot, Report, Series, Table};
 use voxlod::format::GridSpec;
+use voxlod::gpu::cone::{ConeKernel, ConeQuery, GpuConeOctree, GpuMedium, ShadingPoint};
 use voxlod::scene::{Image, Srgb8Image};
 use voxlod_cone::{ConeMedium, ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
 use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree};
 
-use super::{Ui, load_scene, print_json};
-use crate::cli::ConeArgs;
+use super::{Ui, backend, load_scene, print_json};
+use crate::cli::{BackendArg, ConeArgs};
 
 /// One measured option set.
 #[derive(Clone, Debug, Serialize)]
@@ -86,6 +92,8 @@ pub struct LeakRow {
 pub struct ConeOutcome {
     /// Scene spec.
     pub scene: String,
+    /// Where the sweep's cones were traced: "cpu (rayon)" or "gpu: <adapter>".
+    pub backend: String,
     /// AO and indirect noise of the references: MSE between seeds 0 and 1.
     pub reference_noise_mse: [f64; 2],
     /// Reference render times, ms.
@@ -159,9 +167,12 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
         ensure!((1..=1024).contains(&c), "--cones {c}: in 1..=1024");
     }
     super::cone_primary::check_args(&args)?;
+    // No adapter is an error, never a fall-back to the CPU.
+    let (gpu, backend_name) = backend(args.backend)?;
+    let kernel = gpu.as_ref().map(ConeKernel::new);
     let spinner = ui.spinner();
     let say = |m: &str| spinner.set_message(m.to_string());
-    let outcome = run(&args, &say)?;
+    let outcome = run(&args, kernel.as_ref(), &backend_name, &say)?;
     let report = make_report(&outcome)?;
     let written = report
         .write(&args.output)
@@ -170,6 +181,7 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
     if args.json {
         return print_json(&outcome);
     }
+    println!("backend: {backend_name} (the sweep's cone tracing)");
     for t in tables(&outcome)? {
         println!("\n{}", t.to_markdown());
     }
@@ -177,7 +189,12 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
     Ok(())
 }
 
-fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
+fn run(
+    args: &ConeArgs,
+    gpu: Option<&ConeKernel>,
+    backend_name: &str,
+    say: &dyn Fn(&str),
+) -> Result<ConeOutcome> {
     let scene = load_scene(&args.scene)?;
     let geometry = scene.geometry();
     let bvh = Bvh::new(&geometry)?;
@@ -230,6 +247,14 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
             inject_ms,
         ));
         let refs = References { gb: &gb, hits, ao: &ao_ref_img, indirect: &ind_ref_img };
+        let uploaded = match gpu {
+            Some(k) => Some((
+                k,
+                k.upload(&radiance).context("uploading the radiance octree")?,
+                k.upload(&directional).context("uploading the directional radiance octree")?,
+            )),
+            None => None,
+        };
         for &cones in &args.cones {
             for &aperture in &args.apertures {
                 for &step in &args.steps {
@@ -242,10 +267,15 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
                         ..TraceOptions::default()
                     };
                     for opacity in OPACITIES {
+                        let on = |directional| {
+                            uploaded
+                                .as_ref()
+                                .map(|(k, iso, dir)| (*k, if directional { dir } else { iso }))
+                        };
                         let row = if opacity == "isotropic" {
-                            measure(args, &radiance, o, &refs)?
+                            measure(args, &radiance, on(false), o, &refs)?
                         } else {
-                            measure(args, &directional, o, &refs)?
+                            measure(args, &directional, on(true), o, &refs)?
                         };
                         rows.push(ConeRow { resolution: res, opacity: opacity.into(), ..row });
                     }
@@ -259,6 +289,7 @@ fn run(args: &ConeArgs, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
         if args.lod_scene == "none" { None } else { Some(super::cone_primary::run(args, say)?) };
     Ok(ConeOutcome {
         scene: args.scene.clone(),
+        backend: backend_name.into(),
         reference_noise_mse: noise,
         reference_ms: [ao_ms, ind_ms],
         octrees,
@@ -281,10 +312,12 @@ struct References<'a> {
 }
 
 /// AO and `albedo · E/π` by cone tracing `radiance` with `o` from every pixel of the
-/// G-buffer, scored against the references (the row's resolution and opacity are the caller's).
-fn measure<M: ConeMedium + Sync>(
+/// G-buffer — on the CPU, or with the GPU kernel on `gpu`'s upload of the same octree —
+/// scored against the references (the row's resolution and opacity are the caller's).
+fn measure<M: ConeMedium + GpuMedium + Sync>(
     args: &ConeArgs,
     radiance: &Octree<M>,
+    gpu: Option<(&ConeKernel, &GpuConeOctree)>,
     o: TraceOptions,
     refs: &References,
 ) -> Result<ConeRow> {
@@ -293,17 +326,32 @@ fn measure<M: ConeMedium + Sync>(
     let tracer = ConeTracer::new(radiance, o)
         .with_context(|| format!("{cones} cones, aperture {aperture}°, step {step}"))?;
     let t = Instant::now();
-    let out: Vec<(f32, Vec3, u32)> = gb
-        .texels
-        .par_iter()
-        .map(|x| {
-            if x.triangle == u32::MAX {
-                (1.0, Vec3::ZERO, 0)
-            } else {
-                tracer.ao_and_diffuse(x.position, x.normal, true, true)
-            }
-        })
-        .collect();
+    let out: Vec<(f32, Vec3, u32)> = match gpu {
+        None => gb
+            .texels
+            .par_iter()
+            .map(|x| {
+                if x.triangle == u32::MAX {
+                    (1.0, Vec3::ZERO, 0)
+                } else {
+                    tracer.ao_and_diffuse(x.position, x.normal, true, true)
+                }
+            })
+            .collect(),
+        Some((kernel, tree)) => {
+            // Misses get no cones (AO 1, no light), as above; no specular cone is traced.
+            let points = ShadingPoint::from_gbuffer(gb, Vec3::ZERO, 0.0);
+            let query = ConeQuery { ambient_occlusion: true, diffuse: true, specular: false };
+            kernel
+                .trace(tree, &o, query, &points, gb.width)
+                .with_context(|| {
+                    format!("{cones} cones, aperture {aperture}°, step {step} on the GPU")
+                })?
+                .iter()
+                .map(|s| (s.ao, s.diffuse, s.diffuse_steps))
+                .collect()
+        }
+    };
     let trace_ms = ms(t);
     let ao: Vec<f32> = out.iter().map(|o| o.0).collect();
     let e: Vec<Vec3> = out.iter().map(|o| o.1).collect();
@@ -488,7 +536,8 @@ pub fn report_outcome(full: bool, say: &dyn Fn(&str)) -> Result<ConeOutcome> {
     else {
         anyhow::bail!("`voxlod cone` parsed as another command")
     };
-    run(&args, say)
+    ensure!(args.backend == BackendArg::Cpu, "the report traces cones on the CPU");
+    run(&args, None, "cpu (rayon)", say)
 }
 
 /// Appends the cone-tracing section (heading, references, tables, error-vs-time plots).
@@ -498,12 +547,14 @@ pub fn add_to_report(r: &mut Report, o: &ConeOutcome) -> Result<()> {
         "References: ray-traced AO and one-bounce path-traced diffuse indirect light on the mesh \
          ({:.0} ms and {:.0} ms, CPU). Their own noise (MSE between seeds 0 and 1): AO {:.5}, \
          indirect {:.4}; errors below these are not resolved. Octrees (res, voxels, bytes/voxel, \
-         build ms, injection ms): {:?}. Times are CPU times on a shared machine.",
+         build ms, injection ms): {:?}. Cones traced on {}. Times are wall-clock times on a \
+         shared machine (on a CPU adapter such as lavapipe, CPU times of the GPU path).",
         o.reference_ms[0],
         o.reference_ms[1],
         o.reference_noise_mse[0],
         o.reference_noise_mse[1],
-        o.octrees
+        o.octrees,
+        o.backend
     ));
     for t in tables(o)? {
         r.table(t);

@@ -136,3 +136,57 @@ fn cone_command_measures_primary_visibility_with_lod() {
         assert!(err.contains(needle), "{extra:?}: {err}");
     }
 }
+
+/// `voxlod cone --backend gpu`: the sweep's cones traced by the GPU kernel give the CPU's rows
+/// (the same AO and indirect errors against the same references, within the kernel's
+/// rounding) and name the adapter; an adapter that is not there is an error, never a
+/// fall-back to the CPU. Skipped (with a message) where no adapter exists.
+#[test]
+fn cone_command_traces_on_the_gpu_backend() {
+    let run = |backend: &str, adapter: Option<&str>| {
+        let dir = std::env::temp_dir().join(format!(
+            "voxlod-cone-{backend}-{}-{}",
+            std::process::id(),
+            adapter.is_some()
+        ));
+        let mut c = Command::new(env!("CARGO_BIN_EXE_voxlod"));
+        c.args(["cone", "builtin:cornell", "--res", "16", "--cones", "6", "--apertures", "30"])
+            .args(["--steps", "0.5", "--size", "16", "--spp", "4", "--json", "--quiet"])
+            .args(["--lod-scene", "none", "--backend", backend, "-o"])
+            .arg(&dir);
+        if let Some(a) = adapter {
+            c.env("VOXLOD_ADAPTER", a);
+        }
+        let out = c.output().unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        out
+    };
+    let missing = run("gpu", Some("no-such-adapter-xyz"));
+    assert!(!missing.status.success());
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert!(err.contains("no-such-adapter-xyz"), "{err}");
+    if voxlod::gpu::adapters().is_empty() {
+        eprintln!(
+            "no GPU adapter: the GPU sweep is not checked here (the equivalence suite says so)"
+        );
+        return;
+    }
+    let json = |out: std::process::Output| -> serde_json::Value {
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let (cpu, gpu) = (json(run("cpu", None)), json(run("gpu", None)));
+    assert!(cpu["backend"].as_str().unwrap().starts_with("cpu"), "{}", cpu["backend"]);
+    assert!(gpu["backend"].as_str().unwrap().starts_with("gpu: "), "{}", gpu["backend"]);
+    let (a, b) = (cpu["rows"].as_array().unwrap(), gpu["rows"].as_array().unwrap());
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        assert_eq!(x["opacity"], y["opacity"]);
+        assert_eq!(x["steps_per_pixel"], y["steps_per_pixel"], "{x} vs {y}");
+        for k in ["ao_mse", "ao_ssim", "indirect_mse", "indirect_ssim"] {
+            let (p, q) = (x[k].as_f64().unwrap(), y[k].as_f64().unwrap());
+            // 8-bit images of values equal to ~1e-5: at most a few pixels one step apart.
+            assert!((p - q).abs() <= 1e-3, "{k}: cpu {p} vs gpu {q}");
+        }
+    }
+}

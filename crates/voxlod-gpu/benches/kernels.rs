@@ -39,6 +39,18 @@
 //!   voxels' local triangles, uploads, dispatches, readback and the host fit from the sums);
 //!   throughput in lines. Measured on llvmpipe with 2 cores shared with other builds: CPU
 //!   0.40 s, GPU path 6.8 s.
+//! - `cone`: cone tracing (voxlod-cone's `ConeTracer` vs voxlod-gpu's cone kernel) of a
+//!   1280×720 frame on builtin:cornell — 6 diffuse cones of 30° (AO and `E/π` from the same
+//!   marches, AO radius 0.1 of the scene's diagonal) and 1 specular cone (glossiness 0.5) per
+//!   pixel, from the ground-truth G-buffer, through the radiance octree at 64³ (Averages from
+//!   32 lines per voxel, light injected with marched shadows); CPU reference on rayon (all
+//!   cores); GPU with the octree already uploaded (the call uploads the shading points,
+//!   dispatches and reads back). `VOXLOD_BENCH_ONCE=1` times one frame of each path and
+//!   skips criterion's ten samples (a frame takes minutes on lavapipe). Measured that way
+//!   once, 2026-11-24, on 2 cores shared with other builds (under load: the figures are
+//!   indicative only): CPU reference 63.7 s per frame, GPU path on lavapipe 188 s per frame
+//!   (CPU time of the GPU path; 192 s for the first frame, which compiles the kernel); the
+//!   two frames agree to 2.1e-5 (largest |ΔAO| or |ΔE/π| channel).
 //!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
@@ -328,5 +340,79 @@ fn precompute(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, voxelize, raycast, ground_truth, filtered, octree, precompute);
+fn cone(c: &mut Criterion) {
+    use rayon::prelude::*;
+    use voxlod_cone::{ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
+    use voxlod_cpu::appearance::averages;
+    use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+    use voxlod_cpu::appearance::sampler::SamplingContext;
+    use voxlod_gpu::cone::{ConeKernel, ConeQuery, ShadingPoint, reference};
+    use voxlod_octree::{AveragePayload, BuildOptions, Octree};
+    let (width, height) = (1280, 720);
+    let ctx = context();
+    let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
+    let g = scene.geometry();
+    let bvh = Bvh::new(&g).unwrap();
+    let camera = scene.default_camera().unwrap();
+    let (lo, hi) = scene.bounds().unwrap();
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
+    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Options::default()).unwrap();
+    let sampling = SamplingContext::new(&scene, &g, &vox).unwrap();
+    let records =
+        precompute(&sampling, &PrecomputeOptions { rays: 32, seed: 0 }, averages::fit).unwrap();
+    let build = BuildOptions { depth: None, dense_log2: 4 };
+    let tree = Octree::from_brick_map(grid, &records.records, AveragePayload::from_record, &build)
+        .unwrap();
+    let light = match scene.light() {
+        voxlod_scene::Light::Directional { to_light, irradiance } => {
+            Light::Directional { to_light, irradiance }
+        }
+        voxlod_scene::Light::Point { position, intensity } => Light::Point { position, intensity },
+    };
+    let radiance: Octree<RadiancePayload> = inject(&tree, &light, &Shadows::MARCH).unwrap();
+    let gb = voxlod_cpu::render::ground_truth::gbuffer(&scene, &g, &bvh, &camera, width, height)
+        .unwrap();
+    let points = ShadingPoint::from_gbuffer(&gb, camera.eye, 0.5);
+    let options = TraceOptions { ao_radius: 0.1 * (hi - lo).length(), ..TraceOptions::default() };
+    let tracer = ConeTracer::new(&radiance, options).unwrap();
+    let query = ConeQuery::ALL;
+    let cpu = || points.par_iter().map(|p| reference(&tracer, p, query)).collect::<Vec<_>>();
+    let kernel = ctx.as_ref().map(ConeKernel::new);
+    let uploaded = kernel.as_ref().map(|k| k.upload(&radiance).unwrap());
+    let gpu = || {
+        let (k, up) = (kernel.as_ref().unwrap(), uploaded.as_ref().unwrap());
+        k.trace(up, &options, query, &points, width).unwrap()
+    };
+    if std::env::var("VOXLOD_BENCH_ONCE").is_ok_and(|v| v == "1") {
+        let t = std::time::Instant::now();
+        let c = cpu();
+        eprintln!("cone 1280x720 6+1 cones, one frame, cpu: {:.3} s", t.elapsed().as_secs_f64());
+        if kernel.is_some() {
+            // The first call compiles the kernel: time a second one.
+            let t = std::time::Instant::now();
+            black_box(gpu());
+            eprintln!("  gpu path, first frame (compiles): {:.3} s", t.elapsed().as_secs_f64());
+            let t = std::time::Instant::now();
+            let gp = gpu();
+            eprintln!("  gpu path, second frame: {:.3} s", t.elapsed().as_secs_f64());
+            let worst = c
+                .iter()
+                .zip(&gp)
+                .map(|(a, b)| (a.ao - b.ao).abs().max((a.diffuse - b.diffuse).abs().max_element()))
+                .fold(0.0f32, f32::max);
+            eprintln!("  worst |ΔAO|, |ΔE/π| between the two: {worst:.2e}");
+        }
+        return;
+    }
+    let mut group = c.benchmark_group("cone_1280x720_6diffuse_1specular");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(width as u64 * height as u64));
+    group.bench_function("cornell64/cpu", |b| b.iter(|| black_box(cpu())));
+    if kernel.is_some() {
+        group.bench_function("cornell64/gpu-path", |b| b.iter(|| black_box(gpu())));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, voxelize, raycast, ground_truth, filtered, octree, precompute, cone);
 criterion_main!(benches);

@@ -14,6 +14,10 @@ pub enum Error {
     /// Bad octree input, reported exactly as voxlod-octree's CPU builds report it.
     #[error(transparent)]
     Octree(#[from] voxlod_octree::Error),
+    /// Bad cone-tracing options or an octree the flat layout cannot index, reported exactly as
+    /// voxlod-cone reports them.
+    #[error(transparent)]
+    Cone(#[from] voxlod_cone::Error),
     /// No wgpu adapter at all.
     #[error(
         "no GPU adapter found (wgpu enumerated none on Vulkan, Metal or DX12; on Linux without a GPU, \

@@ -13,6 +13,7 @@
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
 //! | [`octree`]: the sparse voxel octree build, lock-free level by level (mark, prefix-sum allocation, links), Averages pre-filter | [`voxlod_octree::FlatOctree::build_level_by_level`], [`voxlod_octree::Octree::build`] | exact topology (levels, nodes, tiles, neighbours); payloads within `8·depth·2⁻²⁴`, see [`octree`] |
 //! | [`precompute`]: the per-voxel ray sampler, Averages sums and opacity subgrid (opaque untextured materials) | [`voxlod_cpu::appearance::precompute::precompute`] with [`voxlod_cpu::appearance::averages::fit`], [`voxlod_cpu::appearance::subgrid::build`] | line cases exact but near-ties, record and subgrid bytes ±1, see [`precompute`] |
+//! | [`cone`]: cone tracing from shading points (AO, diffuse, specular) through a flat radiance octree, isotropic or directional opacities | [`voxlod_cone::ConeTracer`] | per-point bound on AO and radiance, see [`cone`] |
 //!
 //! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,
 //! so bad input gets the CPU path's errors; a GPU entry point never falls back to the CPU.
@@ -22,6 +23,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cone;
 pub mod context;
 mod error;
 pub mod filtered;

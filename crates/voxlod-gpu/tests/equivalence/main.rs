@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`]),
+//! [`voxels`], [`octree`], [`precompute`], [`cone`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -11,6 +11,7 @@
 //! No adapter at all is a failure (loudly), unless `VOXLOD_ALLOW_NO_GPU=1`
 //! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
 
+mod cone;
 mod filtered;
 mod ground_truth;
 mod harness;
@@ -66,6 +67,10 @@ fn equivalence_suite() {
         suite.run("precompute lines (proptest)", backend, precompute::lines_property);
         suite.run("precompute voxels (proptest)", backend, precompute::voxels_property);
         suite.run("precompute (dispatches)", backend, precompute::dispatches);
+        suite.run("cone tracing (scenes)", backend, cone::scenes);
+        suite.run("cone tracing (proptest)", backend, cone::property);
+        suite.run("cone tracing (control)", backend, cone::control);
+        suite.run("cone tracing (errors)", backend, cone::errors);
     }
     suite.finish();
 }
