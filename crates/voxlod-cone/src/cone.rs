@@ -19,7 +19,9 @@
 //! - **Occlusion with falloff** (ambient occlusion): `O += w·f(r)`, where `r` is the distance of
 //!   the sample from the shading point and `f(r) = max(0, 1 − r/R)` for AO radius `R`
 //!   ([`falloff`], the function the ray-traced reference in voxlod-cpu uses with the hit
-//!   distance).
+//!   distance). `f` is 0 from `R` on, so the AO radius never ends a march: a march that gathers
+//!   AO and radiance from the same cones runs to `max_distance` for the radiance, and an
+//!   AO-only march is given `max_distance = R + normal offset`.
 
 use glam::{DVec3, Vec3};
 use voxlod_octree::Octree;
@@ -148,7 +150,6 @@ pub(crate) fn march_cone<M: ConeMedium>(
         Some((p, r)) => (grid.to_grid(DVec3::from(p)).as_vec3(), r / voxel),
         None => (origin, 0.0),
     };
-    let apex_offset = origin.distance(ao_point);
     let mut a = 0.0f32;
     while t <= max_t && a < march.opacity_cutoff {
         let d = (d0 + two_tan * t).max(1.0);
@@ -173,9 +174,10 @@ pub(crate) fn march_cone<M: ConeMedium>(
             }
             a += w;
         }
-        if ao_radius > 0.0 && t - apex_offset > ao_radius {
-            break; // every further sample is farther than R from the shading point
-        }
+        // No stop at the AO radius here: a march that also gathers radiance (AO and diffuse
+        // light from the same cones) must go on to `max_distance`; samples beyond R add
+        // nothing to O (f = 0 there), and an AO-only march is ended by its `max_distance`
+        // (the tracers set it to R plus the normal offset).
         t += step;
     }
     out.opacity = a.clamp(0.0, 1.0);

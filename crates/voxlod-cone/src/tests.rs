@@ -360,6 +360,29 @@ fn diffuse_cones_gather_a_lit_floor() {
     assert!((specular_aperture(f32::NAN).to_degrees() - 30.0).abs() < 1e-4);
 }
 
+/// AO and diffuse light from the same cones (what `voxlod cone` asks for) equal each traced
+/// alone: the AO radius must not end the diffuse march. A point at height 4 under nothing,
+/// facing a lit floor 4 voxels below, with an AO radius of 2: the floor lies beyond the AO
+/// radius, so AO is 1 and the diffuse light is what `diffuse` alone gathers (it used to be
+/// cut to zero at the radius).
+#[test]
+fn ao_and_diffuse_together_equal_each_alone() {
+    let n = 64;
+    let geometry = floor(n, &[]);
+    let light =
+        Light::Directional { to_light: Vec3::Y, irradiance: Vec3::splat(std::f32::consts::PI) };
+    let radiance: Octree<RadiancePayload> = inject(&geometry, &light, &Shadows::None).unwrap();
+    let options = TraceOptions { ao_radius: 2.0, ..Default::default() };
+    let tracer = ConeTracer::new(&radiance, options).unwrap();
+    let (p, normal) = (Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
+    let (ao, e, _) = tracer.ao_and_diffuse(p, normal, true, true);
+    let alone = tracer.diffuse(p, normal);
+    assert!(alone.x > 0.1, "the floor is lit and in view: {alone}");
+    assert_eq!(e, alone);
+    assert_eq!(ao, tracer.ambient_occlusion(p, normal));
+    assert!(ao > 0.99, "nothing within the AO radius: {ao}");
+}
+
 #[test]
 fn directional_opacities_leak_less_through_a_thin_wall() {
     // A one-voxel wall at x = 24 across a 64³ grid; a 30° cone along +x from x = 4 reaches it

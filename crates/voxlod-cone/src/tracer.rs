@@ -193,7 +193,9 @@ impl<'a, M: ConeMedium> ConeTracer<'a, M> {
     }
 
     /// One cone along `dir` from shading point `p` with normal `n`, full `aperture` (radians),
-    /// with the tracer's offsets and limits; AO falloff accumulated if `ao`.
+    /// with the tracer's offsets and limits. With `ao` it is an AO cone: falloff accumulated,
+    /// and the march ends at the AO radius (plus the normal offset), so its radiance covers
+    /// only that far; [`ConeTracer::ao_and_diffuse`] gathers both over the full distance.
     pub fn cone(&self, p: Vec3, n: Vec3, dir: Vec3, aperture: f32, ao: bool) -> ConeResult {
         let Some(n) = Self::valid(p, n) else { return ConeResult::default() };
         let apex = self.apex(p, n);

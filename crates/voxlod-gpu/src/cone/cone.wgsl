@@ -279,7 +279,6 @@ fn march(
     if ao_radius > 0.0 {
         ao_point = (ao_world - params.grid.xyz) / voxel;
     }
-    let apex_offset = length3(origin - ao_point);
     let step_factor = params.march.y;
     let cutoff = params.march.z;
     let depth_f = f32(depth);
@@ -317,9 +316,7 @@ fn march(
             }
             a += w;
         }
-        if ao_radius > 0.0 && t - apex_offset > ao_radius {
-            break;
-        }
+        // cone.rs: the AO radius never ends a march (the AO-only march ends at max_t).
         t += step;
     }
     out.opacity = clamp(a, 0.0, 1.0);
