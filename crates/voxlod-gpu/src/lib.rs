@@ -27,6 +27,7 @@ pub mod ground_truth;
 pub mod layout;
 pub mod random;
 pub mod raycast;
+pub mod volume;
 pub mod voxelize;
 
 pub use context::{AdapterSummary, Context, adapters};
