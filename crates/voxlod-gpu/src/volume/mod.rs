@@ -283,7 +283,10 @@ fn group(spec: &VolumeSpec, pairs: &[(u32, u32)]) -> Vec<Bin> {
         .chunk_by(|a, b| a.0 == b.0)
         .map(|run| {
             let key = run[0].0;
-            Bin { coord: [key / (k * k), key / k % k, key % k], particles: run.iter().map(|p| p.1).collect() }
+            Bin {
+                coord: [key / (k * k), key / k % k, key % k],
+                particles: run.iter().map(|p| p.1).collect(),
+            }
         })
         .collect()
 }
@@ -387,8 +390,7 @@ impl<'a> VolumeKernels<'a> {
     ) -> Result<()> {
         let ctx = self.ctx;
         let layout = pipeline.get_bind_group_layout(0);
-        let entries: Vec<_> =
-            buffers.iter().enumerate().map(|(i, b)| entry(i as u32, b)).collect();
+        let entries: Vec<_> = buffers.iter().enumerate().map(|(i, b)| entry(i as u32, b)).collect();
         let bind = ctx.guarded("binding volume buffers", || {
             ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(during),
@@ -590,7 +592,11 @@ impl<'a> VolumeKernels<'a> {
         let occupied = words
             .chunks_exact(6)
             .map(|b| {
-                if b[0] == u32::MAX { [[0; 3]; 2] } else { [[b[0], b[1], b[2]], [b[3], b[4], b[5]]] }
+                if b[0] == u32::MAX {
+                    [[0; 3]; 2]
+                } else {
+                    [[b[0], b[1], b[2]], [b[3], b[4], b[5]]]
+                }
             })
             .collect();
         Ok(GpuVolume {
@@ -686,15 +692,23 @@ impl<'a> VolumeKernels<'a> {
             };
             let direct = settings.irradiance / std::f32::consts::PI;
             let params = GpuPropagateParams {
-                dims: [m, columns.len() as u32, attenuation_id(settings.attenuation), volume.emissive as u32],
+                dims: [
+                    m,
+                    columns.len() as u32,
+                    attenuation_id(settings.attenuation),
+                    volume.emissive as u32,
+                ],
                 direct: direct.extend(spec.frame.voxel_size).to_array(),
                 ambient: settings.ambient.extend(0.0).to_array(),
             };
-            let slots: Vec<[u32; 4]> = volume.coords.iter().map(|c| [c[0], c[1], c[2], 0]).collect();
+            let slots: Vec<[u32; 4]> =
+                volume.coords.iter().map(|c| [c[0], c[1], c[2], 0]).collect();
             let uniform = ctx.uniform("propagation params", bytemuck::bytes_of(&params))?;
-            let col_buf = ctx.storage_init("propagation columns", bytemuck::cast_slice(&columns))?;
+            let col_buf =
+                ctx.storage_init("propagation columns", bytemuck::cast_slice(&columns))?;
             let slot_buf = ctx.storage_init("propagation slots", bytemuck::cast_slice(&slots))?;
-            let shadow_buf = ctx.storage_init("propagation shadow", bytemuck::cast_slice(&shadow))?;
+            let shadow_buf =
+                ctx.storage_init("propagation shadow", bytemuck::cast_slice(&shadow))?;
             let wg = ctx.dispatch_size("propagation workgroups", items.div_ceil(WORKGROUP))?;
             self.dispatch(
                 "propagating light",
@@ -758,13 +772,18 @@ impl<'a> VolumeKernels<'a> {
             None => vec![1.0; kept * m2],
         };
         let emission: Option<Vec<Vec4>> = if volume.emissive && volume.attenuation.is_none() {
-            Some(bytemuck::cast_slice(&ctx.read(&volume.emission, (kept * m3 * 16) as u64)?).to_vec())
+            Some(
+                bytemuck::cast_slice(&ctx.read(&volume.emission, (kept * m3 * 16) as u64)?)
+                    .to_vec(),
+            )
         } else {
             None
         };
         Ok((0..kept)
             .map(|s| {
-                let e = emission.as_ref().map(|e| e[s * m3..(s + 1) * m3].iter().map(|v| v.truncate()).collect::<Vec<Vec3>>());
+                let e = emission.as_ref().map(|e| {
+                    e[s * m3..(s + 1) * m3].iter().map(|v| v.truncate()).collect::<Vec<Vec3>>()
+                });
                 let e = e.filter(|e| e.iter().any(|v| *v != Vec3::ZERO));
                 (
                     Metavoxel {
@@ -814,8 +833,10 @@ impl<'a> VolumeKernels<'a> {
                 let c = volume.coords[s];
                 let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * mf;
                 let [lo, hi] = volume.occupied[s];
-                let lo = (Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) - 1.0).max(Vec3::ZERO);
-                let hi = (Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) + 1.0).min(Vec3::splat(mf));
+                let lo =
+                    (Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) - 1.0).max(Vec3::ZERO);
+                let hi = (Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) + 1.0)
+                    .min(Vec3::splat(mf));
                 GpuMarchEntry {
                     base: base.extend(0.0).to_array(),
                     lo: (base + lo).extend(0.0).to_array(),
@@ -841,7 +862,8 @@ impl<'a> VolumeKernels<'a> {
         };
         let uniform = ctx.uniform("march params", bytemuck::bytes_of(&params))?;
         let order = ctx.storage_init("march order", bytemuck::cast_slice(&entries))?;
-        let depth_buf = ctx.storage_init("march depth", bytemuck::cast_slice(depth.unwrap_or(&[])))?;
+        let depth_buf =
+            ctx.storage_init("march depth", bytemuck::cast_slice(depth.unwrap_or(&[])))?;
         let image = ctx.storage_zeroed("volume image", image_bytes)?;
         self.dispatch(
             "marching eye rays",
@@ -908,7 +930,8 @@ impl<'a> VolumeKernels<'a> {
         self.propagate(&mut volume, settings, blocker)?;
         times.propagation = t.elapsed();
         volume.times = times;
-        volume.stats = BuildStats { particles: spheres.len(), bin_entries, occupied, kept: bins.len() };
+        volume.stats =
+            BuildStats { particles: spheres.len(), bin_entries, occupied, kept: bins.len() };
         Ok(volume)
     }
 
@@ -987,7 +1010,10 @@ mod tests {
             FILL_WGSL,
             "Params",
             size_of::<GpuFillParams>(),
-            &[("dims", offset_of!(GpuFillParams, dims)), ("frame", offset_of!(GpuFillParams, frame))],
+            &[
+                ("dims", offset_of!(GpuFillParams, dims)),
+                ("frame", offset_of!(GpuFillParams, frame)),
+            ],
         );
         assert_mirrors(
             FILL_WGSL,

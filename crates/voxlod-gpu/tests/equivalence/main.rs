@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`]),
+//! [`voxels`], [`volume`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -17,6 +17,7 @@ mod harness;
 mod images;
 mod random;
 mod raycast;
+mod volume;
 mod voxelize;
 mod voxels;
 
@@ -55,6 +56,14 @@ fn equivalence_suite() {
         suite.run("filtered virtual mesh (proptest)", backend, voxels::vmesh_property);
         suite.run("filtered Adaptive (scenes)", backend, voxels::adaptive_scenes);
         suite.run("filtered Adaptive (proptest)", backend, voxels::adaptive_property);
+        suite.run("volume binning (scenes)", backend, volume::binning_scenes);
+        suite.run("volume fill (scenes)", backend, volume::fill_scenes);
+        suite.run("volume propagation (scenes)", backend, volume::propagation_scenes);
+        suite.run("volume march (scenes)", backend, volume::march_scenes);
+        suite.run("volume frame (scenes)", backend, volume::frame_scenes);
+        suite.run("volume frame (property)", backend, volume::property);
+        suite.run("volume control (must fail)", backend, volume::control);
+        suite.run("volume errors", backend, volume::errors);
     }
     suite.finish();
 }
