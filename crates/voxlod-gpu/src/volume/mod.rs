@@ -248,6 +248,16 @@ pub struct GpuVolume {
     light_top: Option<wgpu::Buffer>,
 }
 
+impl GpuVolume {
+    /// Device bytes of the volume: voxels, emission, light at the column tops, boxes.
+    pub fn bytes(&self) -> u64 {
+        self.voxels.size()
+            + self.emission.size()
+            + self.boxes.size()
+            + self.light_top.as_ref().map_or(0, |b| b.size())
+    }
+}
+
 impl std::fmt::Debug for GpuVolume {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GpuVolume")
@@ -797,6 +807,18 @@ impl<'a> VolumeKernels<'a> {
                 )
             })
             .collect())
+    }
+
+    /// Reads a lit volume back as the CPU's [`Volume`] (for the volume's shadow on the mesh,
+    /// [`Volume::transmittance_to_light`], and for comparisons). Errors before propagation.
+    pub fn read_volume(&self, volume: &GpuVolume) -> Result<Volume> {
+        let Some(attenuation) = volume.attenuation else {
+            return Err(Error::Unsupported {
+                what: "reading a volume that was not lit back as a Volume (propagate it first)",
+            });
+        };
+        let metavoxels = self.read(volume)?.into_iter().map(|(mv, _)| mv).collect();
+        Ok(Volume::from_parts(volume.spec, attenuation, metavoxels, volume.stats, volume.times)?)
     }
 
     /// The eye march (Listing 5.3) of a lit `volume` on the GPU: the CPU's
