@@ -261,13 +261,12 @@ fn volume(c: &mut Criterion) {
     group.bench_function("fill/cpu", |b| {
         b.iter(|| {
             let p = &binning.prepared;
-            black_box(
-                binning
-                    .bins
-                    .iter()
-                    .map(|bin| cpu::fill::fill(&spheres, p, map, &spec, bin))
-                    .count(),
-            )
+            let filled: Vec<_> = binning
+                .bins
+                .iter()
+                .map(|bin| cpu::fill::fill(&spheres, p, map, &spec, bin))
+                .collect();
+            black_box(filled)
         })
     });
     group.bench_function("fill+propagation/cpu", |b| {

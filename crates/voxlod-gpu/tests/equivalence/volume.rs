@@ -203,12 +203,15 @@ fn close(a: f32, b: f32, rel: f64, abs: f64) -> (f64, bool) {
     (d / scale.max(abs / rel), d <= rel * scale + abs)
 }
 
+/// A filled metavoxel and its emission (the CPU fill's output).
+type Filled = (Metavoxel, Option<Vec<Vec3>>);
+
 fn filled(
     k: &Option<VolumeKernels>,
     s: &[DisplacedSphere],
     map: &DisplacementMap,
     spec: &VolumeSpec,
-) -> Result<(Binning, Vec<(Metavoxel, Option<Vec<Vec3>>)>), String> {
+) -> Result<(Binning, Vec<Filled>), String> {
     let b = binning(k, s, spec)?;
     let out = match k {
         None => b.bins.iter().map(|bin| fill(s, &b.prepared, map, spec, bin)).collect(),
@@ -271,7 +274,7 @@ pub fn fill_scenes(backend: &Backend) -> Result<Measure, String> {
 /// Listing 5.2 in `f64` on filled metavoxels (key order, no blocker): lit voxels and
 /// column-top light.
 fn propagate_f64(
-    filled: &[(Metavoxel, Option<Vec<Vec3>>)],
+    filled: &[Filled],
     spec: &VolumeSpec,
     settings: &BuildSettings,
 ) -> Vec<(Vec<[f64; 4]>, Vec<f64>)> {
@@ -289,7 +292,7 @@ fn propagate_f64(
         }
         let top = carry.clone();
         let mut lit: Vec<[f64; 4]> = mv.voxels.iter().map(|v| v.as_dvec4().to_array()).collect();
-        for col in 0..m * m {
+        for (col, light) in carry.iter_mut().enumerate() {
             for c in 0..m {
                 let i = c * m * m + col;
                 let v = mv.voxels[i].as_dvec4();
@@ -303,13 +306,13 @@ fn propagate_f64(
                     _ => (-tau).exp(),
                 };
                 let reach = match settings.attenuation {
-                    Attenuation::Exact if tau >= 1e-4 => carry[col] * (1.0 - (-tau).exp()) / tau,
-                    Attenuation::Exact => carry[col] * (1.0 - 0.5 * tau),
-                    _ => carry[col],
+                    Attenuation::Exact if tau >= 1e-4 => *light * (1.0 - (-tau).exp()) / tau,
+                    Attenuation::Exact => *light * (1.0 - 0.5 * tau),
+                    _ => *light,
                 };
                 let rgb = v.truncate() * (direct * reach + ambient) + e;
                 lit[i] = [rgb.x, rgb.y, rgb.z, v.w];
-                carry[col] *= t;
+                *light *= t;
             }
         }
         out.push((lit, top));
