@@ -263,8 +263,8 @@ pub struct VolumeArgs {
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
     /// Where to build and march the volume (gpu: the four voxlod-gpu volume kernels, equal to
-    /// the CPU within the equivalence suite's bounds; the mesh and the exact reference stay
-    /// on the CPU).
+    /// the CPU within the equivalence suite's bounds; the mesh's ground truth stays on the
+    /// CPU).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
     /// Output directory.

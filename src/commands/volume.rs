@@ -43,7 +43,7 @@ pub fn volume(ui: &Ui, args: VolumeArgs) -> Result<()> {
     println!("backend: {backend_name}");
     if gpu.is_some() {
         println!(
-            "(binning, fill, propagation and march on the GPU; the mesh and the exact reference on the CPU)"
+            "(binning, fill, propagation and march on the GPU; the mesh's ground truth on the CPU)"
         );
     }
     for table in result.tables()? {

@@ -224,8 +224,7 @@ enum Backend<'a> {
 }
 
 impl Backend<'_> {
-    /// Builds (with `view` culling, `bvh` shadowing) and marches one volume; the exact
-    /// reference always on the CPU (the GPU has no exact-march kernel), said in its row.
+    /// Builds (with `view` culling, `bvh` shadowing) and marches one volume.
     #[allow(clippy::too_many_arguments)]
     fn frame(
         &self,
@@ -241,7 +240,7 @@ impl Backend<'_> {
         read_back: bool,
     ) -> Result<Frame, Error> {
         match self {
-            Backend::Gpu(k, gpu_bvh) if settings.attenuation != Attenuation::Exact => {
+            Backend::Gpu(k, gpu_bvh) => {
                 let t = Instant::now();
                 let v = k.build(spheres, map, spec, settings, Some(view), Some(gpu_bvh))?;
                 let build = t.elapsed();
@@ -263,7 +262,7 @@ impl Backend<'_> {
                 };
                 Ok(Frame { volume, image, build, march, bytes })
             }
-            _ => {
+            Backend::Cpu => {
                 let t = Instant::now();
                 let v = volume::build(spheres, map, spec, settings, Some(view), Some(bvh))?;
                 let build = t.elapsed();
@@ -278,7 +277,7 @@ impl Backend<'_> {
 }
 
 /// Runs the measurement, building and marching on `gpu` when given (the mesh's ground truth
-/// stays on the CPU, and so does the exact reference). Errors on an unknown preset, a
+/// stays on the CPU). Errors on an unknown preset, a
 /// resolution not divisible by a metavoxel size, or any pipeline error.
 pub fn run_on(
     config: &VolumeConfig,
@@ -377,9 +376,8 @@ pub fn run_on(
     let attenuation = rendered
         .iter()
         .map(|(att, img, build_s, march_s, shadowed_mesh_s)| {
-            let on_cpu = gpu.is_some() && *att == Attenuation::Exact;
             Ok(AttenuationRow {
-                model: if on_cpu { format!("{} (cpu)", att.name()) } else { att.name().into() },
+                model: att.name().into(),
                 metrics: voxlod_eval::compare(img, &reference)?,
                 build_s: *build_s,
                 march_s: *march_s,
@@ -540,8 +538,8 @@ pub fn add_to_report(
         "Volume built and marched on {}{}.",
         result.backend,
         if result.backend.starts_with("gpu") {
-            " (the exact reference model on the CPU: the GPU has no exact-march kernel; volume \
-             bytes are device bytes, peak MiB the host heap)"
+            " (the mesh's ground truth on the CPU; volume bytes are device bytes, peak MiB the \
+             host heap)"
         } else {
             ""
         }

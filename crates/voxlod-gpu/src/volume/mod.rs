@@ -9,6 +9,7 @@
 //! | [`VolumeKernels::fill`] (§5.5.2) | `fill.wgsl` (64) | voxel of a kept metavoxel | bounds below |
 //! | [`VolumeKernels::propagate`] (Listing 5.2) | `propagate.wgsl` (64) | voxel column | bounds below |
 //! | [`VolumeKernels::render`] (Listing 5.3) | `march.wgsl` (8×8) | pixel | bounds below |
+//! | [`VolumeKernels::render`], exact model | `march_exact.wgsl` (8×8) | pixel | bounds below |
 //!
 //! [`VolumeKernels::build`] runs binning, culling, fill and propagation (the CPU's
 //! [`voxlod_cpu::volume::build`]) and [`VolumeKernels::frame`] the whole frame (build, then the
@@ -63,9 +64,10 @@
 //! Input is checked as the CPU checks it ([`voxlod_cpu::volume::validate_spheres`], the
 //! irradiance, the `max_bytes` budget, the march's image size, step, camera and depth buffer),
 //! with the very same errors. Buffers over the device's limits are
-//! [`Error::BufferTooLarge`] with the numbers; over `2³²` voxels, candidates or pixels
-//! [`Error::TooLarge`]. [`Attenuation::Exact`] (the per-voxel exact reference march) has no
-//! GPU march kernel: [`Error::Unsupported`]. Binning's compaction and sort run on the host (a
+//! [`Error::BufferTooLarge`] with the numbers; over `2³²` voxels or candidates
+//! [`Error::TooLarge`]. A volume lit with [`Attenuation::Exact`] is marched by the reference
+//! march (`march_exact.wgsl`: every voxel crossed with its exact length, the CPU's
+//! `render_exact`), as the CPU's `render` does. Binning's compaction and sort run on the host (a
 //! GPU prefix-sum compaction and segmented sort would replace them on a real GPU).
 
 use std::time::{Duration, Instant};
@@ -94,6 +96,8 @@ pub const FILL_WGSL: &str = concat!(include_str!("common.wgsl"), include_str!("f
 pub const PROPAGATE_WGSL: &str = include_str!("propagate.wgsl");
 /// WGSL of the eye march kernel.
 pub const MARCH_WGSL: &str = include_str!("march.wgsl");
+/// WGSL of the exact-attenuation reference march kernel.
+pub const MARCH_EXACT_WGSL: &str = include_str!("march_exact.wgsl");
 
 /// Invocations per workgroup of the binning, fill and propagation kernels.
 pub const WORKGROUP: u64 = 64;
@@ -372,6 +376,7 @@ pub struct VolumeKernels<'a> {
     fill: wgpu::ComputePipeline,
     propagate: wgpu::ComputePipeline,
     march: wgpu::ComputePipeline,
+    march_exact: wgpu::ComputePipeline,
 }
 
 impl<'a> VolumeKernels<'a> {
@@ -383,6 +388,7 @@ impl<'a> VolumeKernels<'a> {
             fill: ctx.pipeline("volume fill", FILL_WGSL)?,
             propagate: ctx.pipeline("volume propagation", PROPAGATE_WGSL)?,
             march: ctx.pipeline("volume march", MARCH_WGSL)?,
+            march_exact: ctx.pipeline("volume exact march", MARCH_EXACT_WGSL)?,
         })
     }
 
@@ -832,67 +838,79 @@ impl<'a> VolumeKernels<'a> {
     ) -> Result<Image> {
         let ctx = self.ctx;
         let frame = check_march(camera, options, depth)?;
-        let attenuation = match volume.attenuation {
-            None => {
-                return Err(Error::Unsupported {
-                    what: "marching a volume that was not lit (propagate it first)",
-                });
-            }
-            Some(Attenuation::Exact) => {
-                return Err(Error::Unsupported {
-                    what: "the exact-attenuation reference march (Attenuation::Exact): use voxlod_cpu::volume::march::render_exact",
-                });
-            }
-            Some(a) => a,
+        let Some(attenuation) = volume.attenuation else {
+            return Err(Error::Unsupported {
+                what: "marching a volume that was not lit (propagate it first)",
+            });
         };
         let spec = &volume.spec;
         let m = spec.metavoxel_edge;
         let mf = m as f32;
-        let entries: Vec<GpuMarchEntry> = sort_order(spec, &volume.coords, frame.eye)
-            .into_iter()
-            .filter(|&(s, _)| volume.occupied[s][0][0] < volume.occupied[s][1][0])
-            .map(|(s, over)| {
-                let c = volume.coords[s];
-                let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * mf;
-                let [lo, hi] = volume.occupied[s];
-                let lo =
-                    (Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) - 1.0).max(Vec3::ZERO);
-                let hi = (Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) + 1.0)
-                    .min(Vec3::splat(mf));
-                GpuMarchEntry {
-                    base: base.extend(0.0).to_array(),
-                    lo: (base + lo).extend(0.0).to_array(),
-                    hi: (base + hi).extend(0.0).to_array(),
-                    flags: [s as u32, over as u32, 0, 0],
-                }
-            })
-            .collect();
         let pixels = options.width as u64 * options.height as u64;
         let image_bytes = pixels * 16;
         ctx.check_storage("volume image", image_bytes)?;
         let wg = ctx.image_dispatch("volume march workgroups", options.width, options.height)?;
         let f = &spec.frame;
-        let params = GpuMarchParams {
+        let mut params = GpuMarchParams {
             eye: frame.eye.extend(0.0).to_array(),
             forward: frame.forward.extend(0.0).to_array(),
             right: frame.right.extend(0.0).to_array(),
             up: frame.up.extend(0.0).to_array(),
             frame: GpuFrame::new(f),
             eye_voxel: f.to_voxel(frame.eye).extend(options.step * f.voxel_size).to_array(),
-            dims: [options.width, options.height, entries.len() as u32, m],
+            dims: [options.width, options.height, 0, m],
             mode: [attenuation_id(attenuation), depth.is_some() as u32, 0, 0],
         };
-        let uniform = ctx.uniform("march params", bytemuck::bytes_of(&params))?;
-        let order = ctx.storage_init("march order", bytemuck::cast_slice(&entries))?;
         let depth_buf =
             ctx.storage_init("march depth", bytemuck::cast_slice(depth.unwrap_or(&[])))?;
         let image = ctx.storage_zeroed("volume image", image_bytes)?;
-        self.dispatch(
-            "marching eye rays",
-            &self.march,
-            &[&uniform, &order, &volume.voxels, &depth_buf, &image],
-            wg,
-        )?;
+        if attenuation == Attenuation::Exact {
+            // The reference march: every voxel crossed, through the K³ slot index.
+            let k = spec.metavoxels;
+            let mut index = vec![u32::MAX; (k as usize).pow(3)];
+            for (s, &c) in volume.coords.iter().enumerate() {
+                index[spec.key(c) as usize] = s as u32;
+            }
+            params.dims[2] = k;
+            params.eye_voxel[3] = 1e-4 * f.voxel_size;
+            let uniform = ctx.uniform("exact march params", bytemuck::bytes_of(&params))?;
+            let index_buf = ctx.storage_init("metavoxel index", bytemuck::cast_slice(&index))?;
+            self.dispatch(
+                "marching eye rays (exact)",
+                &self.march_exact,
+                &[&uniform, &index_buf, &volume.voxels, &depth_buf, &image],
+                wg,
+            )?;
+        } else {
+            let entries: Vec<GpuMarchEntry> = sort_order(spec, &volume.coords, frame.eye)
+                .into_iter()
+                .filter(|&(s, _)| volume.occupied[s][0][0] < volume.occupied[s][1][0])
+                .map(|(s, over)| {
+                    let c = volume.coords[s];
+                    let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * mf;
+                    let [lo, hi] = volume.occupied[s];
+                    let lo =
+                        (Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) - 1.0).max(Vec3::ZERO);
+                    let hi = (Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) + 1.0)
+                        .min(Vec3::splat(mf));
+                    GpuMarchEntry {
+                        base: base.extend(0.0).to_array(),
+                        lo: (base + lo).extend(0.0).to_array(),
+                        hi: (base + hi).extend(0.0).to_array(),
+                        flags: [s as u32, over as u32, 0, 0],
+                    }
+                })
+                .collect();
+            params.dims[2] = entries.len() as u32;
+            let uniform = ctx.uniform("march params", bytemuck::bytes_of(&params))?;
+            let order = ctx.storage_init("march order", bytemuck::cast_slice(&entries))?;
+            self.dispatch(
+                "marching eye rays",
+                &self.march,
+                &[&uniform, &order, &volume.voxels, &depth_buf, &image],
+                wg,
+            )?;
+        }
         let pixels: Vec<Vec4> = bytemuck::cast_slice(&ctx.read(&image, image_bytes)?).to_vec();
         Ok(Image { width: options.width, height: options.height, pixels })
     }
@@ -1063,6 +1081,24 @@ mod tests {
         let f = offset_of!(P, frame);
         assert_mirrors(
             MARCH_WGSL,
+            "Params",
+            size_of::<P>(),
+            &[
+                ("eye", offset_of!(P, eye)),
+                ("forward", offset_of!(P, forward)),
+                ("right", offset_of!(P, right)),
+                ("up", offset_of!(P, up)),
+                ("origin", f),
+                ("u", f + 16),
+                ("v", f + 32),
+                ("w", f + 48),
+                ("eye_voxel", offset_of!(P, eye_voxel)),
+                ("dims", offset_of!(P, dims)),
+                ("mode", offset_of!(P, mode)),
+            ],
+        );
+        assert_mirrors(
+            MARCH_EXACT_WGSL,
             "Params",
             size_of::<P>(),
             &[

@@ -21,7 +21,9 @@
 //!   direction (normalization, division), fused multiply-adds and `exp` move a sample that sits
 //!   within rounding of a voxel face to the neighbouring voxel: **1 sRGB step per pixel for
 //!   99 % of the pixels** (the CPU's own order-based render against its front-to-back check
-//!   is held to the same).
+//!   is held to the same). The third case is lit with the exact model, which `render` marches
+//!   with the reference march; its oracle is the CPU's [`render_exact`] (so on the CPU
+//!   backend that case compares the function with itself).
 //! - **Whole frame** — oracle: the CPU reference's frame (`build` with culling and the mesh's
 //!   shadow, then `render` stopping at the mesh depth). Everything above accumulates:
 //!   **2 sRGB steps for 98 % of the pixels**.
@@ -36,7 +38,7 @@ use glam::Vec3;
 use voxlod_cpu::raycast::Bvh;
 use voxlod_cpu::volume::binning::{Bin, Binning, bin, bin_brute_force};
 use voxlod_cpu::volume::fill::{fill, fill_unaccelerated};
-use voxlod_cpu::volume::march::{render, render_front_to_back};
+use voxlod_cpu::volume::march::{render, render_exact, render_front_to_back};
 use voxlod_cpu::volume::propagate::propagate;
 use voxlod_cpu::volume::{self, Attenuation, BuildSettings, MarchOptions, Metavoxel, VolumeSpec};
 use voxlod_gpu::raycast::upload_bvh;
@@ -391,7 +393,8 @@ pub fn march_scenes(backend: &Backend) -> Result<Measure, String> {
     for (case, (n, seed, light, kk, m, density)) in cases().into_iter().enumerate() {
         let s = cloud(n, seed, density);
         let spec = spec(light, kk, m);
-        let attenuation = if case == 1 { Attenuation::Chapter } else { Attenuation::BeerLambert };
+        let attenuation =
+            [Attenuation::BeerLambert, Attenuation::Chapter, Attenuation::Exact][case];
         let settings = BuildSettings { attenuation, ..Default::default() };
         let v = volume::build(&s, &map, &spec, &settings, None, None).map_err(|e| e.to_string())?;
         let uploaded = match &k {
@@ -399,8 +402,11 @@ pub fn march_scenes(backend: &Backend) -> Result<Measure, String> {
             Some(k) => Some(k.upload(&v).map_err(|e| e.to_string())?),
         };
         for (name, camera) in &cameras {
-            let want =
-                render_front_to_back(&v, camera, &options, None).map_err(|e| e.to_string())?;
+            let want = match attenuation {
+                Attenuation::Exact => render_exact(&v, camera, &options, None),
+                _ => render_front_to_back(&v, camera, &options, None),
+            }
+            .map_err(|e| e.to_string())?;
             let got = match (&k, &uploaded) {
                 (Some(k), Some(u)) => {
                     k.render(u, camera, &options, None).map_err(|e| e.to_string())?
