@@ -10,6 +10,7 @@
 //! | [`random`]: the PCG3D counter RNG | [`voxlod_cpu::random`] | exact (bit for bit) |
 //! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
+//! | [`volume`]: the metavoxel volumes (seed 001): binning, fill, light propagation, eye march (all three attenuation models) | [`voxlod_cpu::volume`] | binning exact; fill, propagation and march per-value / per-pixel bounds, see [`volume`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
 //!
 //! Host-side preparation (snapping to the lattice, culling, BVH build) uses voxlod-cpu's code,

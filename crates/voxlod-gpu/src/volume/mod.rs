@@ -357,6 +357,15 @@ fn check_march(
     Ok(camera.frame(options.width, options.height))
 }
 
+/// `v`, or one zeroed element when it is empty (a binding must hold one element of its
+/// array; the kernels read none of it then).
+fn at_least_one<T: bytemuck::Zeroable>(mut v: Vec<T>) -> Vec<T> {
+    if v.is_empty() {
+        v.push(T::zeroed());
+    }
+    v
+}
+
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
@@ -473,7 +482,7 @@ impl<'a> VolumeKernels<'a> {
         let results = ctx.storage_zeroed("binning results", result_bytes)?;
         let wg = ctx.dispatch_size("binning workgroups", total.div_ceil(WORKGROUP))?;
         self.dispatch("binning", &self.binning, &[&uniform, &cands, &results], wg)?;
-        let results: Vec<u32> = bytemuck::cast_slice(&ctx.read(&results, result_bytes)?).to_vec();
+        let results: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.read(&results, result_bytes)?);
         // Compaction, in candidate order; the undecided ones by the reference predicate.
         let mut pairs = Vec::new();
         for (r, &owner) in records.iter().zip(&owners) {
@@ -571,7 +580,8 @@ impl<'a> VolumeKernels<'a> {
         ctx.check_storage("volume emission", emission_bytes)?;
         let boxes_init: Vec<u32> =
             bins.iter().flat_map(|_| [u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]).collect();
-        let voxel_buf = ctx.storage_zeroed("volume voxels", voxel_bytes)?;
+        // At least one element: a binding must hold one element of its array.
+        let voxel_buf = ctx.storage_zeroed("volume voxels", voxel_bytes.max(16))?;
         let emission = ctx.storage_zeroed("volume emission", emission_bytes)?;
         let boxes = ctx.storage_init("volume boxes", bytemuck::cast_slice(&boxes_init))?;
         if !bins.is_empty() {
@@ -604,7 +614,7 @@ impl<'a> VolumeKernels<'a> {
             )?;
         }
         let words: Vec<u32> =
-            bytemuck::cast_slice(&ctx.read(&boxes, boxes_init.len() as u64 * 4)?).to_vec();
+            bytemuck::pod_collect_to_vec(&ctx.read(&boxes, boxes_init.len() as u64 * 4)?);
         let occupied = words
             .chunks_exact(6)
             .map(|b| {
@@ -763,7 +773,8 @@ impl<'a> VolumeKernels<'a> {
             emissive: false,
             stats: volume.stats,
             times: volume.times,
-            voxels: ctx.storage_init("volume voxels", bytemuck::cast_slice(&voxels))?,
+            voxels: ctx
+                .storage_init("volume voxels", bytemuck::cast_slice(&at_least_one(voxels)))?,
             emission: ctx.storage_zeroed("volume emission", 16)?,
             boxes: ctx.storage_init("volume boxes", bytemuck::cast_slice(&boxes))?,
             light_top: Some(ctx.storage_init("volume light", bytemuck::cast_slice(&light))?),
@@ -782,16 +793,15 @@ impl<'a> VolumeKernels<'a> {
             return Ok(Vec::new());
         }
         let voxels: Vec<Vec4> =
-            bytemuck::cast_slice(&ctx.read(&volume.voxels, (kept * m3 * 16) as u64)?).to_vec();
+            bytemuck::pod_collect_to_vec(&ctx.read(&volume.voxels, (kept * m3 * 16) as u64)?);
         let light: Vec<f32> = match &volume.light_top {
-            Some(b) => bytemuck::cast_slice(&ctx.read(b, (kept * m2 * 4) as u64)?).to_vec(),
+            Some(b) => bytemuck::pod_collect_to_vec(&ctx.read(b, (kept * m2 * 4) as u64)?),
             None => vec![1.0; kept * m2],
         };
         let emission: Option<Vec<Vec4>> = if volume.emissive && volume.attenuation.is_none() {
-            Some(
-                bytemuck::cast_slice(&ctx.read(&volume.emission, (kept * m3 * 16) as u64)?)
-                    .to_vec(),
-            )
+            Some(bytemuck::pod_collect_to_vec(
+                &ctx.read(&volume.emission, (kept * m3 * 16) as u64)?,
+            ))
         } else {
             None
         };
@@ -903,7 +913,8 @@ impl<'a> VolumeKernels<'a> {
                 .collect();
             params.dims[2] = entries.len() as u32;
             let uniform = ctx.uniform("march params", bytemuck::bytes_of(&params))?;
-            let order = ctx.storage_init("march order", bytemuck::cast_slice(&entries))?;
+            let order =
+                ctx.storage_init("march order", bytemuck::cast_slice(&at_least_one(entries)))?;
             self.dispatch(
                 "marching eye rays",
                 &self.march,
@@ -911,7 +922,7 @@ impl<'a> VolumeKernels<'a> {
                 wg,
             )?;
         }
-        let pixels: Vec<Vec4> = bytemuck::cast_slice(&ctx.read(&image, image_bytes)?).to_vec();
+        let pixels: Vec<Vec4> = bytemuck::pod_collect_to_vec(&ctx.read(&image, image_bytes)?);
         Ok(Image { width: options.width, height: options.height, pixels })
     }
 

@@ -62,6 +62,7 @@ fn equivalence_suite() {
         suite.run("volume march (scenes)", backend, volume::march_scenes);
         suite.run("volume frame (scenes)", backend, volume::frame_scenes);
         suite.run("volume frame (property)", backend, volume::property);
+        suite.run("volume frame (extremes)", backend, volume::extremes);
         suite.run("volume control (must fail)", backend, volume::control);
         suite.run("volume errors", backend, volume::errors);
     }

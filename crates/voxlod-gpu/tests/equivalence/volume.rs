@@ -571,6 +571,78 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
     Ok(Measure::combine(&out))
 }
 
+/// The extremes of the CPU's own tests: density 0 and 10⁶, particles outside the volume or
+/// larger than it, no particles, under axis and diagonal lights: bins exact, frames within the
+/// frame bound, every image finite.
+pub fn extremes(backend: &Backend) -> Result<Measure, String> {
+    let k = kernels(backend)?;
+    let map = map();
+    let one = |c: Vec3, inner: f32, amplitude: f32, density: f32| DisplacedSphere {
+        center: c,
+        inner,
+        amplitude,
+        color: Vec3::new(0.9, 0.7, 0.5),
+        color_outer: Vec3::splat(0.3),
+        density,
+        rot_cos: 1.0,
+        rot_sin: 0.0,
+        color_mode: 0,
+        flags: 0,
+    };
+    let dense_centre = one(Vec3::ZERO, 0.3, 0.1, 1e6);
+    let cases: Vec<(&str, Vec<DisplacedSphere>)> = vec![
+        ("density 0", cloud(50, 8, 0.0)),
+        ("density 1e6", {
+            let mut c = cloud(50, 8, 1e6);
+            c.push(dense_centre);
+            c
+        }),
+        ("outside", vec![one(Vec3::splat(30.0), 1.0, 0.5, 1.0)]),
+        ("larger than the volume", vec![one(Vec3::ZERO, 40.0, 10.0, 0.5), dense_centre]),
+        ("empty", Vec::new()),
+    ];
+    let cameras = [
+        Camera::look_at(Vec3::new(0.5, 2.5, 3.0), Vec3::ZERO, Vec3::Y, 50.0),
+        Camera::look_at(Vec3::new(0.01, 0.02, 0.03), Vec3::new(1.0, 0.0, 0.0), Vec3::Y, 60.0),
+    ];
+    let options = MarchOptions { width: 24, height: 20, step: 1.0 };
+    let mut images = Vec::new();
+    let mut bins = Vec::new();
+    for to_light in [Vec3::Y, Vec3::NEG_Z, Vec3::ONE] {
+        let spec = spec(to_light, 2, 6);
+        for (name, s) in &cases {
+            let got = binning(&k, s, &spec)?;
+            bins.push(exact_bins(name, &got.bins, &bin_brute_force(s, &spec)));
+            for (ci, camera) in cameras.iter().enumerate() {
+                for att in [Attenuation::Chapter, Attenuation::BeerLambert, Attenuation::Exact] {
+                    let settings = BuildSettings { attenuation: att, ..Default::default() };
+                    let want = reference_frame(s, &map, &spec, &settings, camera, &options, None)?;
+                    let got = frame(&k, s, &map, &spec, &settings, camera, &options, None)?;
+                    if !got.pixels.iter().all(|p| p.is_finite()) {
+                        return Err(format!(
+                            "{name}, camera {ci}, {}: non-finite pixels",
+                            att.name()
+                        ));
+                    }
+                    let label = format!("volume-extreme-{}-{ci}", name.replace(' ', "-"));
+                    images.push(compare(&label, &got, &want, FRAME_BOUND));
+                }
+            }
+        }
+    }
+    let mut m = Measure::combine(&images);
+    let b = Measure::combine(&bins);
+    m.pass &= b.pass;
+    m.note = format!(
+        "{} frames, worst {:.3e} of pixels over the bound; {} binnings{}",
+        images.len(),
+        m.max_error,
+        bins.len(),
+        if b.pass { " exact".to_string() } else { format!(": {}", b.note) }
+    );
+    Ok(m)
+}
+
 /// The checks above can fail: a frame with 20 % denser particles is beyond the frame bound,
 /// a bin list with one particle dropped is not exact, and a frame built without the mesh's
 /// shadow (light from below the floor) is beyond the frame bound.
