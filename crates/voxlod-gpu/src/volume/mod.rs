@@ -57,7 +57,9 @@
 //! some voxels need the cube map and others do not. Propagation: 64 consecutive columns of one
 //! metavoxel column, each step down reading and writing a contiguous row of voxels. March:
 //! 8×8 pixel tiles walking the same metavoxel list; rays that miss a metavoxel skip it after
-//! one slab test. The covered-voxel box uses global atomics (six per covered voxel); a
+//! one slab test (every pixel tests every non-empty kept metavoxel, where the CPU first clips
+//! each to its screen rectangle: with thousands of kept metavoxels a real GPU would want
+//! per-tile lists). The covered-voxel box uses global atomics (six per covered voxel); a
 //! workgroup reduction first would cut that traffic on a real GPU.
 //!
 //! # Limits and errors
