@@ -271,6 +271,11 @@ pub struct VolumeArgs {
     /// Rays per pixel of the mesh's ground truth.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
+    /// Where to build and march the volume (gpu: the four voxlod-gpu volume kernels, equal to
+    /// the CPU within the equivalence suite's bounds; the mesh's ground truth stays on the
+    /// CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
     /// Output directory.
     #[arg(short, long, default_value = "out/volume")]
     pub output: PathBuf,

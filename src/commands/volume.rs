@@ -4,7 +4,7 @@ use anyhow::{Context, Result, ensure};
 use voxlod::eval::report::Report;
 use voxlod::experiment::volume::{self, PRESETS, VolumeConfig};
 
-use super::{Ui, print_json};
+use super::{Ui, backend, print_json};
 use crate::cli::VolumeArgs;
 
 /// Renders the preset, writes `<output>/report.md` (+ images, JSON) and prints the tables.
@@ -26,9 +26,10 @@ pub fn volume(ui: &Ui, args: VolumeArgs) -> Result<()> {
         image: args.image,
         mesh_spp: args.spp,
     };
+    let (gpu, backend_name) = backend(args.backend)?;
     let spinner = ui.spinner();
     let progress = |msg: &str| spinner.set_message(msg.to_string());
-    let result = volume::run(&config, &progress)
+    let result = volume::run_on(&config, gpu.as_ref(), &progress)
         .with_context(|| format!("rendering the volume preset '{}'", args.preset))?;
     let mut report = Report::new(format!("voxlod volume {}", args.preset));
     volume::add_to_report(&mut report, &result)?;
@@ -38,6 +39,12 @@ pub fn volume(ui: &Ui, args: VolumeArgs) -> Result<()> {
     spinner.finish_and_clear();
     if args.json {
         return print_json(&result);
+    }
+    println!("backend: {backend_name}");
+    if gpu.is_some() {
+        println!(
+            "(binning, fill, propagation and march on the GPU; the mesh's ground truth on the CPU)"
+        );
     }
     for table in result.tables()? {
         println!("\n{}", table.to_markdown());

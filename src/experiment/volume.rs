@@ -113,6 +113,8 @@ pub struct SizeRow {
 pub struct VolumeResult {
     /// The preset.
     pub preset: String,
+    /// Which backend built and marched the volume (`cpu (rayon)` or `gpu: <adapter>`).
+    pub backend: String,
     /// Particles alive in the frame.
     pub particles: usize,
     /// Voxels per axis.
@@ -199,9 +201,89 @@ fn secs(d: Duration) -> f64 {
     d.as_secs_f64()
 }
 
-/// Runs the measurement. Errors on an unknown preset, a resolution not divisible by a
-/// metavoxel size, or any pipeline error.
+/// Runs the measurement on the CPU backend ([`run_on`] without a GPU).
 pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResult, Error> {
+    run_on(config, None, progress)
+}
+
+/// One volume built and marched: the volume (the light filter of the shadowed mesh), the
+/// image, the build and march times, the stats and stage times, the volume's bytes.
+struct Frame {
+    volume: volume::Volume,
+    image: Image,
+    build: Duration,
+    march: Duration,
+    bytes: u64,
+}
+
+/// The backend that builds and marches: the CPU reference, or the GPU kernels
+/// (`voxlod_gpu::volume`) with the mesh's BVH uploaded for the scene's shadow.
+enum Backend<'a> {
+    Cpu,
+    Gpu(voxlod_gpu::volume::VolumeKernels<'a>, voxlod_gpu::raycast::GpuBvh),
+}
+
+impl Backend<'_> {
+    /// Builds (with `view` culling, `bvh` shadowing) and marches one volume.
+    #[allow(clippy::too_many_arguments)]
+    fn frame(
+        &self,
+        spheres: &[voxlod_scene::particles::DisplacedSphere],
+        map: &voxlod_scene::particles::DisplacementMap,
+        spec: &VolumeSpec,
+        settings: &BuildSettings,
+        view: &voxlod_scene::camera::CameraFrame,
+        bvh: &Bvh,
+        camera: &Camera,
+        options: &MarchOptions,
+        depth: &[f32],
+        read_back: bool,
+    ) -> Result<Frame, Error> {
+        match self {
+            Backend::Gpu(k, gpu_bvh) => {
+                let t = Instant::now();
+                let v = k.build(spheres, map, spec, settings, Some(view), Some(gpu_bvh))?;
+                let build = t.elapsed();
+                let t = Instant::now();
+                let image = k.render(&v, camera, options, Some(depth))?;
+                let march = t.elapsed();
+                let bytes = v.bytes();
+                // The read-back (for the volume's shadow on the mesh) is not timed.
+                let volume = if read_back {
+                    k.read_volume(&v)?
+                } else {
+                    volume::Volume::from_parts(
+                        *spec,
+                        settings.attenuation,
+                        Vec::new(),
+                        v.stats,
+                        v.times,
+                    )?
+                };
+                Ok(Frame { volume, image, build, march, bytes })
+            }
+            Backend::Cpu => {
+                let t = Instant::now();
+                let v = volume::build(spheres, map, spec, settings, Some(view), Some(bvh))?;
+                let build = t.elapsed();
+                let t = Instant::now();
+                let image = march::render(&v, camera, options, Some(depth))?;
+                let march = t.elapsed();
+                let bytes = v.bytes();
+                Ok(Frame { volume: v, image, build, march, bytes })
+            }
+        }
+    }
+}
+
+/// Runs the measurement, building and marching on `gpu` when given (the mesh's ground truth
+/// stays on the CPU). Errors on an unknown preset, a
+/// resolution not divisible by a metavoxel size, or any pipeline error.
+pub fn run_on(
+    config: &VolumeConfig,
+    gpu: Option<&voxlod_gpu::Context>,
+    progress: &dyn Fn(&str),
+) -> Result<VolumeResult, Error> {
     let bad = |name: &str, value: String, reason: &str| {
         Error::Scene(voxlod_scene::Error::InvalidParameter {
             name: name.into(),
@@ -249,17 +331,38 @@ pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResul
     // Attenuation models at the size closest to the chapter's M = 32.
     let m_ref = *config.metavoxel_sizes.iter().min_by_key(|&&m| m.abs_diff(32)).unwrap_or(&32);
     let spec = VolumeSpec::fit(lo, hi, to_light, config.resolution / m_ref, m_ref)?;
+    let backend = match gpu {
+        None => Backend::Cpu,
+        Some(ctx) => {
+            progress("compiling the GPU volume kernels");
+            let k = voxlod_gpu::volume::VolumeKernels::new(ctx)?;
+            let gpu_bvh = voxlod_gpu::raycast::upload_bvh(ctx, &bvh, &geometry)?;
+            Backend::Gpu(k, gpu_bvh)
+        }
+    };
+    let backend_name = match gpu {
+        None => "cpu (rayon)".to_string(),
+        Some(ctx) => format!("gpu: {}", ctx.summary()),
+    };
     let mut images = vec![("mesh".to_string(), gt.image.clone())];
     let mut rendered = Vec::new();
     for att in [Attenuation::Exact, Attenuation::Chapter, Attenuation::BeerLambert] {
         progress(&format!("volume, {}", att.name()));
         let settings = BuildSettings { attenuation: att, ..Default::default() };
-        let t = Instant::now();
-        let v = volume::build(&spheres, map, &spec, &settings, Some(&frame), Some(&bvh))?;
-        let build_s = secs(t.elapsed());
-        let t = Instant::now();
-        let img = march::render(&v, &camera, &march_options, Some(&depth))?;
-        let march_s = secs(t.elapsed());
+        let f = backend.frame(
+            &spheres,
+            map,
+            &spec,
+            &settings,
+            &frame,
+            &bvh,
+            &camera,
+            &march_options,
+            &depth,
+            true,
+        )?;
+        let (v, img) = (f.volume, f.image);
+        let (build_s, march_s) = (secs(f.build), secs(f.march));
         // The volume's shadow on the mesh: the same render, the volume filtering the light.
         let t = Instant::now();
         let shadowed_options = ground_truth::Options { light_filter: Some(&v), ..gt_options };
@@ -290,12 +393,21 @@ pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResul
         let spec = VolumeSpec::fit(lo, hi, to_light, config.resolution / m, m)?;
         let settings = BuildSettings::default();
         let (built, peak_bytes) = alloc::measure_peak(|| {
-            let v = volume::build(&spheres, map, &spec, &settings, Some(&frame), Some(&bvh))?;
-            let t = Instant::now();
-            march::render(&v, &camera, &march_options, Some(&depth))?;
-            Ok::<_, Error>((v, t.elapsed()))
+            backend.frame(
+                &spheres,
+                map,
+                &spec,
+                &settings,
+                &frame,
+                &bvh,
+                &camera,
+                &march_options,
+                &depth,
+                false,
+            )
         });
-        let (v, march_time) = built?;
+        let f = built?;
+        let (v, march_time) = (&f.volume, f.march);
         sizes.push(SizeRow {
             metavoxel_edge: m,
             metavoxels: spec.metavoxels,
@@ -307,12 +419,13 @@ pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResul
             propagation_s: secs(v.times.propagation),
             march_s: secs(march_time),
             peak_bytes,
-            volume_bytes: v.bytes(),
+            volume_bytes: f.bytes,
             dense_bytes: spec.dense_bytes(),
         });
     }
     Ok(VolumeResult {
         preset: config.preset.clone(),
+        backend: backend_name,
         particles: spheres.len(),
         resolution: config.resolution,
         image: config.image,
@@ -331,13 +444,14 @@ impl VolumeResult {
         let mut a = Table::new(
             format!(
                 "{}: attenuation against the exact reference ({} particles, {}³ voxels, {}×{}; \
-                 mesh ground truth at {} spp: {:.3} s alone, 'shadowed mesh s' with the volume's \
-                 shadow)",
+                 volume on {}; mesh ground truth at {} spp on the CPU: {:.3} s alone, 'shadowed \
+                 mesh s' with the volume's shadow)",
                 self.preset,
                 self.particles,
                 self.resolution,
                 self.image,
                 self.image,
+                self.backend,
                 self.mesh_spp,
                 self.mesh_s
             ),
@@ -361,7 +475,10 @@ impl VolumeResult {
             ])?;
         }
         let mut s = Table::new(
-            format!("{}: metavoxel size M (K = {} / M), exp(-d)", self.preset, self.resolution),
+            format!(
+                "{}: metavoxel size M (K = {} / M), exp(-d), on {}",
+                self.preset, self.resolution, self.backend
+            ),
             vec![
                 Column::number("M", F::Integer),
                 Column::number("K", F::Integer),
@@ -417,6 +534,16 @@ pub fn add_to_report(
          with Volume::transmittance_to_light filtering each shading point's direct light). Errors are of the composited 8-bit sRGB image against the \
          exact reference; times are wall-clock on this machine, all cores.",
     );
+    report.text(format!(
+        "Volume built and marched on {}{}.",
+        result.backend,
+        if result.backend.starts_with("gpu") {
+            " (the mesh's ground truth on the CPU; volume bytes are device bytes, peak MiB the \
+             host heap)"
+        } else {
+            ""
+        }
+    ));
     report.text(format!(
         "Mesh ground truth ({}×{}, {} rays per pixel): {:.3} s without the volume's shadow; the \
          'shadowed mesh s' column is the same render with it, per model.",

@@ -63,3 +63,63 @@ fn volume_preset_writes_the_report_and_measures_the_trade() {
     assert!(err.contains("unknown preset 'fog'"), "{err}");
     assert!(!dir.exists(), "nothing written on error");
 }
+
+/// `voxlod volume --backend gpu` builds and marches on the adapter, says so (the JSON's
+/// `backend`), and scores like the CPU run: the four kernels match the CPU within the
+/// equivalence suite's bounds, so each model's MSE against the reference agrees to 5 % and its
+/// SSIM to 0.005. No adapter fails loudly unless `VOXLOD_ALLOW_NO_GPU=1`.
+#[test]
+fn volume_on_the_gpu_scores_like_the_cpu_and_says_which_backend() {
+    if voxlod::gpu::adapters().is_empty() {
+        eprintln!(
+            "!!!!!!!! NO GPU ADAPTER FOUND: `voxlod volume --backend gpu` was NOT checked !!!!!!!!"
+        );
+        let allowed = std::env::var("VOXLOD_ALLOW_NO_GPU").is_ok_and(|v| v == "1");
+        assert!(allowed, "no GPU adapter (set VOXLOD_ALLOW_NO_GPU=1 to allow)");
+        return;
+    }
+    let run = |backend: &str| {
+        let dir =
+            std::env::temp_dir().join(format!("voxlod-volume-{backend}-{}", std::process::id()));
+        let out = voxlod(&[
+            "volume",
+            "smoke",
+            "--particles",
+            "300",
+            "--res",
+            "16",
+            "--m",
+            "8",
+            "--image",
+            "32",
+            "--spp",
+            "1",
+            "--backend",
+            backend,
+            "-o",
+            dir.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        (v, report)
+    };
+    let ((cpu, _), (gpu, report)) = (run("cpu"), run("gpu"));
+    assert_eq!(cpu["backend"], "cpu (rayon)");
+    let name = gpu["backend"].as_str().unwrap();
+    assert!(name.starts_with("gpu: "), "{name}");
+    assert!(report.contains(&format!("Volume built and marched on {name}")), "{report}");
+    let (a, b) = (cpu["attenuation"].as_array().unwrap(), gpu["attenuation"].as_array().unwrap());
+    assert_eq!(a.len(), b.len());
+    for (c, g) in a.iter().zip(b) {
+        assert_eq!(c["model"], g["model"]);
+        let (mc, mg) =
+            (c["metrics"]["mse"].as_f64().unwrap(), g["metrics"]["mse"].as_f64().unwrap());
+        assert!((mc - mg).abs() <= 0.05 * mc + 1e-7, "MSE cpu {mc} vs gpu {mg}");
+        let (sc, sg) =
+            (c["metrics"]["ssim"].as_f64().unwrap(), g["metrics"]["ssim"].as_f64().unwrap());
+        assert!((sc - sg).abs() <= 0.005, "SSIM cpu {sc} vs gpu {sg}");
+    }
+}

@@ -51,6 +51,11 @@
 //!   indicative only): CPU reference 63.7 s per frame, GPU path on lavapipe 188 s per frame
 //!   (CPU time of the GPU path; 192 s for the first frame, which compiles the kernel); the
 //!   two frames agree to 2.1e-5 (largest |ΔAO| or |ΔE/π| channel).
+//! - `volume`: the metavoxel pipeline (seed 001) on the smoke preset (2000 particles) at 64³
+//!   voxels, M = 16, 128×128 pixels, Beer–Lambert: each stage on its own (binning; fill of the
+//!   binned metavoxels; propagation, the fill included as its input; march of the built volume)
+//!   and the whole frame, CPU reference (rayon, all cores) against the GPU path (uploads,
+//!   dispatches and readback included). On lavapipe: CPU timings of the GPU path.
 //!
 //! `cargo bench -p voxlod-gpu --bench kernels` (one group: append its name, e.g. `ground_truth`)
 
@@ -414,5 +419,105 @@ fn cone(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, voxelize, raycast, ground_truth, filtered, octree, precompute, cone);
+fn volume(c: &mut Criterion) {
+    use voxlod_cpu::volume::{self as cpu, BuildSettings, MarchOptions, VolumeSpec};
+    use voxlod_gpu::volume::VolumeKernels;
+    let ctx = context();
+    let kernels = ctx.as_ref().map(|ctx| VolumeKernels::new(ctx).expect("kernels compile"));
+    let system = voxlod_scene::particles::smoke_column(&voxlod_scene::particles::SmokeParams {
+        count: 2000,
+        ..Default::default()
+    })
+    .unwrap();
+    let spheres = system.at(system.time);
+    let map = &system.displacement;
+    let (lo, hi) = voxlod_scene::particles::bounds(&spheres).unwrap();
+    let spec = VolumeSpec::fit(lo, hi, Vec3::new(0.3, 1.0, 0.2), 4, 16).unwrap();
+    let settings = BuildSettings::default();
+    let camera =
+        Camera::framing(Vec3::new(0.4, 0.3, 1.0), (lo + hi) * 0.5, (hi - lo).length() * 0.5, 45.0);
+    let options = MarchOptions { width: 128, height: 128, step: 1.0 };
+    let binning = cpu::binning::bin(&spheres, &spec);
+    let built = cpu::build(&spheres, map, &spec, &settings, None, None).unwrap();
+    let mut group = c.benchmark_group("volume_smoke_2000");
+    group.sample_size(10);
+    group.bench_function("binning/cpu", |b| {
+        b.iter(|| black_box(cpu::binning::bin(&spheres, &spec)))
+    });
+    group.bench_function("fill/cpu", |b| {
+        b.iter(|| {
+            let p = &binning.prepared;
+            let filled: Vec<_> = binning
+                .bins
+                .iter()
+                .map(|bin| cpu::fill::fill(&spheres, p, map, &spec, bin))
+                .collect();
+            black_box(filled)
+        })
+    });
+    group.bench_function("fill+propagation/cpu", |b| {
+        b.iter(|| {
+            let p = &binning.prepared;
+            let mut f: Vec<_> = binning
+                .bins
+                .iter()
+                .map(|bin| cpu::fill::fill(&spheres, p, map, &spec, bin))
+                .collect();
+            cpu::propagate::propagate(&mut f, &spec, &settings, None);
+            black_box(f)
+        })
+    });
+    group.bench_function("march/cpu", |b| {
+        b.iter(|| black_box(cpu::march::render(&built, &camera, &options, None).unwrap()))
+    });
+    group.bench_function("frame/cpu", |b| {
+        b.iter(|| {
+            let view = camera.frame(options.width, options.height);
+            let v = cpu::build(&spheres, map, &spec, &settings, Some(&view), None).unwrap();
+            black_box(cpu::march::render(&v, &camera, &options, None).unwrap())
+        })
+    });
+    if let Some(k) = &kernels {
+        group.bench_function("binning/gpu-path", |b| {
+            b.iter(|| black_box(k.bin(&spheres, &spec).unwrap()))
+        });
+        group.bench_function("fill/gpu-path", |b| {
+            b.iter(|| {
+                black_box(k.fill(&spheres, &binning.prepared, map, &spec, &binning.bins).unwrap())
+            })
+        });
+        group.bench_function("fill+propagation/gpu-path", |b| {
+            b.iter(|| {
+                let mut v = k.fill(&spheres, &binning.prepared, map, &spec, &binning.bins).unwrap();
+                k.propagate(&mut v, &settings, None).unwrap();
+                black_box(v)
+            })
+        });
+        let uploaded = k.upload(&built).unwrap();
+        group.bench_function("march/gpu-path", |b| {
+            b.iter(|| black_box(k.render(&uploaded, &camera, &options, None).unwrap()))
+        });
+        group.bench_function("frame/gpu-path", |b| {
+            b.iter(|| {
+                black_box(
+                    k.frame(&spheres, map, &spec, &settings, None, &camera, &options, None)
+                        .unwrap(),
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    voxelize,
+    raycast,
+    ground_truth,
+    filtered,
+    octree,
+    precompute,
+    cone,
+    volume
+);
 criterion_main!(benches);

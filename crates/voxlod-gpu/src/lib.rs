@@ -10,6 +10,7 @@
 //! | [`random`]: the PCG3D counter RNG | [`voxlod_cpu::random`] | exact (bit for bit) |
 //! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
+//! | [`volume`]: the metavoxel volumes (seed 001): binning, fill, light propagation, eye march (all three attenuation models) | [`voxlod_cpu::volume`] | binning exact; fill, propagation and march per-value / per-pixel bounds, see [`volume`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
 //! | [`octree`]: the sparse voxel octree build, lock-free level by level (mark, prefix-sum allocation, links), Averages pre-filter | [`voxlod_octree::FlatOctree::build_level_by_level`], [`voxlod_octree::Octree::build`] | exact topology (levels, nodes, tiles, neighbours); payloads within `8·depth·2⁻²⁴`, see [`octree`] |
 //! | [`precompute`]: the per-voxel ray sampler, Averages sums and opacity subgrid (opaque untextured materials) | [`voxlod_cpu::appearance::precompute::precompute`] with [`voxlod_cpu::appearance::averages::fit`], [`voxlod_cpu::appearance::subgrid::build`] | line cases exact but near-ties, record and subgrid bytes ±1, see [`precompute`] |
@@ -33,6 +34,7 @@ pub mod octree;
 pub mod precompute;
 pub mod random;
 pub mod raycast;
+pub mod volume;
 pub mod voxelize;
 
 pub use context::{AdapterSummary, Context, adapters};

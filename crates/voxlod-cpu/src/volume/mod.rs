@@ -321,6 +321,39 @@ impl Volume {
         self.metavoxels.get(i as usize)
     }
 
+    /// A volume from lit metavoxels built elsewhere (the GPU backend's read-back): sorted by
+    /// key with their `K³` index rebuilt. Errors when a metavoxel is outside the spec, has the
+    /// wrong number of voxels or light values, or the keys are not strictly increasing.
+    pub fn from_parts(
+        spec: VolumeSpec,
+        attenuation: Attenuation,
+        metavoxels: Vec<Metavoxel>,
+        stats: BuildStats,
+        times: StageTimes,
+    ) -> Result<Self> {
+        let (k, m) = (spec.metavoxels, spec.metavoxel_edge as usize);
+        let mut index = vec![u32::MAX; (k as usize).pow(3)];
+        let mut previous = None;
+        for (i, mv) in metavoxels.iter().enumerate() {
+            let ok = mv.coord.iter().all(|&c| c < k)
+                && mv.voxels.len() == m * m * m
+                && mv.light_top.len() == m * m
+                && previous.is_none_or(|p| p < spec.key(mv.coord));
+            if !ok {
+                return Err(Error::InvalidParameter {
+                    name: "metavoxel",
+                    value: format!("{i}: {:?}", mv.coord),
+                    reason: format!(
+                        "must lie in the {k}³ metavoxels, hold {m}³ voxels and {m}² light values,                          keys strictly increasing"
+                    ),
+                });
+            }
+            previous = Some(spec.key(mv.coord));
+            index[spec.key(mv.coord) as usize] = i as u32;
+        }
+        Ok(Self { spec, attenuation, metavoxels, index, stats, times })
+    }
+
     /// Heap bytes of the volume: the kept metavoxels' voxels and light, plus the `K³` index.
     pub fn bytes(&self) -> u64 {
         let per: u64 = self

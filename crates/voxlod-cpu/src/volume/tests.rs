@@ -622,3 +622,20 @@ fn volume_shadow_extremes_density_zero_and_a_million() {
         assert!((p - ambient).abs().max_element() < 1e-3, "light {to_light}: {p}");
     }
 }
+
+#[test]
+fn from_parts_rebuilds_the_index_and_rejects_bad_parts() {
+    let spec = spec(Vec3::Y, 3, 4);
+    let v =
+        build(&cloud(60, 3, 2.0), &map(), &spec, &settings(Attenuation::BeerLambert), None, None)
+            .unwrap();
+    let again =
+        Volume::from_parts(spec, v.attenuation, v.metavoxels.clone(), v.stats, v.times).unwrap();
+    assert_eq!(again, v);
+    let mut reversed = v.metavoxels.clone();
+    reversed.reverse();
+    assert!(Volume::from_parts(spec, v.attenuation, reversed, v.stats, v.times).is_err());
+    let mut short = v.metavoxels.clone();
+    short[0].voxels.pop();
+    assert!(Volume::from_parts(spec, v.attenuation, short, v.stats, v.times).is_err());
+}

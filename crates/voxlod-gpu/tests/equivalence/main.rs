@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`], [`cone`]),
+//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -20,6 +20,7 @@ mod octree;
 mod precompute;
 mod random;
 mod raycast;
+mod volume;
 mod voxelize;
 mod voxels;
 
@@ -71,6 +72,15 @@ fn equivalence_suite() {
         suite.run("cone tracing (proptest)", backend, cone::property);
         suite.run("cone tracing (control)", backend, cone::control);
         suite.run("cone tracing (errors)", backend, cone::errors);
+        suite.run("volume binning (scenes)", backend, volume::binning_scenes);
+        suite.run("volume fill (scenes)", backend, volume::fill_scenes);
+        suite.run("volume propagation (scenes)", backend, volume::propagation_scenes);
+        suite.run("volume march (scenes)", backend, volume::march_scenes);
+        suite.run("volume frame (scenes)", backend, volume::frame_scenes);
+        suite.run("volume frame (property)", backend, volume::property);
+        suite.run("volume frame (extremes)", backend, volume::extremes);
+        suite.run("volume control (must fail)", backend, volume::control);
+        suite.run("volume errors", backend, volume::errors);
     }
     suite.finish();
 }
