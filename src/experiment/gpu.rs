@@ -2,7 +2,7 @@
 //! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
 //! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
 //! Every row says which backend rendered it. Nothing falls back silently: a scene the GPU
-//! ground truth refuses (textured or alpha-tested materials) is an error naming the scene.
+//! ground truth refuses (textures over the device's limits, say) is an error naming the scene.
 
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::{BrickMap, GridSpec};
