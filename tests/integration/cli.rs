@@ -323,7 +323,7 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
     // The forest's alpha-masked textured leaves render on the GPU too (once refused): its
     // ground truth comes from the adapter, not the CPU.
     let spec = "builtin:forest?trees=1&leaves=8";
-    let args = ["compare", spec, "--res", "8", "--image", "0", "--spp", "4", "--views", "1"];
+    let args = ["compare", spec, "--res", "12", "--image", "0", "--spp", "4", "--views", "1"];
     let args = [&args[..], &["--rays", "16", "--thresholds", "0.2"]].concat();
     let out =
         voxlod(&[&args[..], &["--backend", "gpu", "--json", "-o", s(&dir.join("f"))]].concat());
