@@ -19,7 +19,7 @@ pub enum Error {
     /// From voxlod-gpu (adapter, kernels), when the GPU backend was asked for.
     #[error(transparent)]
     Gpu(#[from] voxlod_gpu::Error),
-    /// A scene the GPU backend cannot render (e.g. textured materials in the ground truth).
+    /// A scene the GPU backend cannot render (e.g. textures over the device's storage limits).
     #[error("scene '{scene}' cannot be rendered on the GPU backend")]
     GpuScene {
         /// The scene's spec.

@@ -144,8 +144,8 @@ pub struct RenderArgs {
     /// Also write the G-buffer (depth, normal, albedo PNGs) next to the output.
     #[arg(long)]
     pub gbuffer: bool,
-    /// Where to render (gpu: opaque untextured materials; equal to the CPU's image within the
-    /// equivalence suite's bound).
+    /// Where to render (gpu: every material — textured, alpha-masked, alpha-blended; equal to
+    /// the CPU's image within the equivalence suite's bound).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
     /// Print a JSON summary.
@@ -176,9 +176,9 @@ pub struct CompareSceneArgs {
     /// Adaptive thresholds, comma-separated.
     #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',')]
     pub thresholds: Vec<f32>,
-    /// Where to render the images that have a GPU kernel (gpu: the ground truth — opaque
-    /// untextured materials, else an error —, the baseline, Averages and [VJK21]; the virtual
-    /// mesh and Adaptive stay on the CPU). Every row says which backend rendered it.
+    /// Where to render the images that have a GPU kernel (gpu: the ground truth — every
+    /// material, textures and alpha included —, the baseline, Averages and [VJK21], the virtual
+    /// mesh and Adaptive). Every row says which backend rendered it.
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
     /// Output directory.

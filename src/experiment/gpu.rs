@@ -2,9 +2,10 @@
 //! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
 //! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
 //! Every row says which backend rendered it, and which precomputed its records: Averages is
-//! precomputed on the adapter too (`voxlod_gpu::precompute`), the other representations on the
-//! CPU. Nothing falls back silently: a scene the GPU
-//! ground truth refuses (textured or alpha-tested materials) is an error naming the scene.
+//! precomputed on the adapter too (`voxlod_gpu::precompute`, opaque untextured materials;
+//! other scenes' Averages are precomputed on the CPU and their rows say `cpu`), the other
+//! representations on the CPU. Nothing else falls back: a scene the GPU ground truth refuses
+//! (textures over the device's limits, say) is an error naming the scene.
 
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::{BrickMap, GridSpec};

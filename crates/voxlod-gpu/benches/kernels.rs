@@ -11,7 +11,8 @@
 //! - `raycast`: 256×256 primary rays on the bunny, framing view; CPU reference
 //!   `Bvh::intersect` in a loop on one thread; GPU with the BVH already uploaded.
 //!
-//! - `ground_truth`: the cornell box, 128×128 at 16 rays per pixel with shadows; CPU reference
+//! - `ground_truth`: the cornell box and a forest with alpha-masked textured leaves (20 trees,
+//!   1 500 leaves each), 128×128 at 16 rays per pixel with shadows; CPU reference
 //!   `voxlod_cpu::render::ground_truth::render` (rayon, all cores); both also fill the
 //!   pixel-centre G-buffer (one extra ray per pixel); GPU with the scene already uploaded.
 //!
@@ -160,23 +161,28 @@ fn ground_truth(c: &mut Criterion) {
     use voxlod_cpu::render::ground_truth::{Options, render};
     use voxlod_gpu::ground_truth::GroundTruthKernel;
     let ctx = context();
-    let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
-    let g = scene.geometry();
-    let bvh = Bvh::new(&g).unwrap();
-    let camera = scene.default_camera().unwrap();
+    let kernel = ctx.as_ref().map(|ctx| GroundTruthKernel::new(ctx).unwrap());
     let options = Options { width: 128, height: 128, spp: 16, ..Options::default() };
     let mut group = c.benchmark_group("ground_truth_128x128_16spp");
     group.sample_size(10);
     group.throughput(Throughput::Elements(128 * 128 * 16));
-    group.bench_function("cornell/cpu", |b| {
-        b.iter(|| black_box(render(&scene, &g, &bvh, &camera, &options).unwrap()))
-    });
-    if let Some(ctx) = &ctx {
-        let kernel = GroundTruthKernel::new(ctx).unwrap();
-        let gpu = kernel.upload(&scene, &g, &bvh).unwrap();
-        group.bench_function("cornell/gpu-path", |b| {
-            b.iter(|| black_box(kernel.render(&gpu, &camera, &options).unwrap()))
+    // cornell: opaque, untextured; forest: the default forest's alpha-masked textured leaves
+    // (every candidate hit on a leaf samples its texture), 20 trees of 1 500 leaves.
+    let forest = [("trees", "20"), ("leaves", "1500"), ("alpha", "true")];
+    for (name, kv) in [("cornell", &[][..]), ("forest-alpha", &forest[..])] {
+        let scene = voxlod_scene::procedural::builtin(name.split('-').next().unwrap(), kv).unwrap();
+        let g = scene.geometry();
+        let bvh = Bvh::new(&g).unwrap();
+        let camera = scene.default_camera().unwrap();
+        group.bench_function(format!("{name}/cpu"), |b| {
+            b.iter(|| black_box(render(&scene, &g, &bvh, &camera, &options).unwrap()))
         });
+        if let Some(kernel) = &kernel {
+            let gpu = kernel.upload(&scene, &g, &bvh).unwrap();
+            group.bench_function(format!("{name}/gpu-path"), |b| {
+                b.iter(|| black_box(kernel.render(&gpu, &camera, &options).unwrap()))
+            });
+        }
     }
     group.finish();
 }

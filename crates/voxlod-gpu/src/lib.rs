@@ -8,7 +8,8 @@
 //! | [`voxelize`]: conservative / thin surface voxelization | [`voxlod_cpu::voxelize`] | exact (occupancy and triangles per voxel) |
 //! | [`raycast`]: closest hit of rays through a BVH | [`voxlod_cpu::raycast::Bvh::intersect`] | see [`raycast`] |
 //! | [`random`]: the PCG3D counter RNG | [`voxlod_cpu::random`] | exact (bit for bit) |
-//! | [`ground_truth`]: the ground-truth renderer (opaque untextured materials) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
+//! | [`material`]: materials and textures (bilinear, wrap modes, sRGB decode, alpha modes) | [`voxlod_scene::Material::sample`] | texture samples within 2^-21, see [`material`] |
+//! | [`ground_truth`]: the ground-truth renderer (every material: textured, alpha-masked, alpha-blended) | [`voxlod_cpu::render::ground_truth::render`] | per-pixel bound on 8-bit sRGB, see [`ground_truth`] |
 //! | [`filtered`]: the filtered voxel renderer, Averages and \[VJK21\] records and the baseline's opaque voxels (shadows, point and directional lights) | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered`] |
 //! | [`volume`]: the metavoxel volumes (seed 001): binning, fill, light propagation, eye march (all three attenuation models) | [`voxlod_cpu::volume`] | binning exact; fill, propagation and march per-value / per-pixel bounds, see [`volume`] |
 //! | [`filtered::voxels`]: the same renderer on virtual mesh + opacity subgrid grids (both directional-opacity rules, projected area) and Adaptive grids | [`voxlod_cpu::render::filtered::render`] | per-pixel bound on 8-bit sRGB, see [`filtered::voxels`] |
@@ -30,6 +31,7 @@ mod error;
 pub mod filtered;
 pub mod ground_truth;
 pub mod layout;
+pub mod material;
 pub mod octree;
 pub mod precompute;
 pub mod random;

@@ -1,5 +1,5 @@
 // The ground-truth renderer (voxlod-cpu's render::ground_truth + render::surface), appended to
-// random.wgsl, shading.wgsl and bvh.wgsl. One invocation per pixel in 8×8 tiles (neighbouring
+// random.wgsl, shading.wgsl, material.wgsl, bvh.wgsl and bvh_alpha.wgsl. One invocation per pixel in 8×8 tiles (neighbouring
 // rays walk the same BVH nodes); a dispatch covers samples [first, end) of every pixel and adds
 // them, in sample order, to the pixel's running sum, so a dispatch's length is bounded whatever
 // the samples per pixel and the sum's order is the CPU's.
@@ -13,7 +13,7 @@ struct Params {
     ambient: vec4<f32>,
     light_a: vec4<f32>,      // directional: unit to_light; point: position
     light_b: vec4<f32>,      // directional: irradiance; point: intensity
-    size: vec4<u32>,         // width, height, spp, flags (1: shadows, 2: point light)
+    size: vec4<u32>,         // width, height, spp, flags (1: shadows, 2: point light, 4: alpha tests)
     samples: vec4<u32>,      // first sample, end sample, 1 to write the G-buffer, 0
     streams: vec4<u32>,      // jitter_x, jitter_y, alpha_primary, alpha_shadow keys
 }
@@ -25,11 +25,8 @@ struct ShadeTri {
     n0: vec4<f32>, // vertex normals
     n1: vec4<f32>,
     n2: vec4<f32>,
-}
-
-struct Material {
-    albedo: vec4<f32>,   // w = 1 if double-sided
-    specular: vec4<f32>, // w = shininess
+    uv01: vec4<f32>, // vertex UVs 0 (xy) and 1 (zw)
+    uv2: vec4<f32>,  // vertex UV 2 (xy)
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -37,6 +34,8 @@ struct Material {
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read_write> sums: array<vec4<f32>>; // rgb sum, hits
 @group(0) @binding(6) var<storage, read_write> gbuffer: array<GTexel>;
+@group(0) @binding(7) var<storage, read> textures: Textures;
+@group(0) @binding(8) var<storage, read> texels: array<u32>;
 
 // voxlod-cpu's GTexel: what the ray through the pixel centre sees (coverage is set on the host).
 struct GTexel {
@@ -103,16 +102,38 @@ fn offset_origin(t: ShadeTri, point: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
     return point + select(-n, n, dot(n, dir) >= 0.0) * eps;
 }
 
-// The radiance a camera ray along `dir` brings back (the background on a miss); `hit` says
-// whether it met the scene.
-struct Sample {
-    radiance: vec3<f32>,
-    hit: bool,
-}
-
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
+    material: MaterialEval,
+}
+
+// Geometry::interpolate's UV: uv0·(1 − u − v) + uv1·u + uv2·v.
+fn hit_uv(t: ShadeTri, u: f32, v: f32) -> vec2<f32> {
+    let w = 1.0 - u - v;
+    return t.uv01.xy * w + t.uv01.zw * u + t.uv2.xy * v;
+}
+
+// surface.rs `accepts`: whether a candidate hit counts for the ray (the alpha test).
+fn accepts_hit(triangle: u32, u: f32, v: f32, ray: AlphaRay) -> bool {
+    if (params.size.w & 4u) == 0u {
+        return true;
+    }
+    let t = shade_tris[triangle];
+    let m = bitcast<u32>(t.p0.w);
+    let mode = materials[m].alpha_mode;
+    if mode == 0u {
+        return true;
+    }
+    let alpha = material_alpha(m, hit_uv(t, u, v));
+    if mode == 2u {
+        return rand_f32(ray.pixel, ray.sample, ray.key ^ triangle) < alpha;
+    }
+    return alpha > 0.0;
+}
+
+fn primary_ray(pixel: u32, sample: u32) -> AlphaRay {
+    return AlphaRay(pixel, sample, params.streams.z);
 }
 
 // The surface point of hit `h` seen along `dir` (surface.rs `surface`).
@@ -131,51 +152,22 @@ fn surface(h: Hit, dir: vec3<f32>) -> Surface {
             normal = vec3<f32>(0.0, 0.0, 1.0);
         }
     }
-    let mat = materials[bitcast<u32>(t.p0.w)];
-    if mat.albedo.w != 0.0 && dot(cross(b - a, c - a), dir) > 0.0 {
+    let m = bitcast<u32>(t.p0.w);
+    out.material = material_sample(m, hit_uv(t, h.u, h.v));
+    if materials[m].double_sided != 0u && dot(cross(b - a, c - a), dir) > 0.0 {
         normal = -normal;
     }
     out.normal = normal;
     return out;
 }
 
-fn centre_texel(dir: vec3<f32>) -> GTexel {
-    var g: GTexel;
-    let h = trace(params.eye.xyz, dir, 0.0, F32_MAX, false);
-    if h.triangle == MISS {
-        g.depth = bitcast<f32>(0x7f800000u); // +inf, as the CPU writes
-        g.triangle = MISS;
-        return g;
-    }
-    let s = surface(h, dir);
-    g.position = s.position;
-    g.depth = h.t;
-    g.normal = s.normal;
-    g.coverage = 1.0;
-    g.albedo = materials[bitcast<u32>(shade_tris[h.triangle].p0.w)].albedo.xyz;
-    g.triangle = h.triangle;
-    return g;
-}
+// The sample index of the pixel-centre ray in the random streams (ground_truth.rs CENTRE_SAMPLE).
+const CENTRE_SAMPLE: u32 = 0xffffffffu;
 
-fn camera_sample(dir: vec3<f32>) -> Sample {
-    var out: Sample;
-    let eye = params.eye.xyz;
-    let h = trace(eye, dir, 0.0, F32_MAX, false);
-    if h.triangle == MISS {
-        out.radiance = params.background.xyz;
-        out.hit = false;
-        return out;
-    }
-    out.hit = true;
-    let t = shade_tris[h.triangle];
-    let sp = surface(h, dir);
-    let position = sp.position;
-    let normal = sp.normal;
-    let mat = materials[bitcast<u32>(t.p0.w)];
-    // The light seen from the point (Light::sample).
+// The light seen from `position` (Light::sample).
+fn light_at(position: vec3<f32>) -> LightSample {
     var light: LightSample;
-    let point_light = (params.size.w & 2u) != 0u;
-    if point_light {
+    if (params.size.w & 2u) != 0u {
         let d = params.light_a.xyz - position;
         let dist = length(d);
         light.to_light = select(vec3<f32>(0.0, 1.0, 0.0), d / dist, dist > 0.0);
@@ -185,26 +177,18 @@ fn camera_sample(dir: vec3<f32>) -> Sample {
         light.to_light = params.light_a.xyz;
         light.irradiance = params.light_b.xyz;
     }
-    // One shadow ray (surface.rs `radiance`).
-    var visibility = 1.0;
-    if (params.size.w & 1u) != 0u && dot(normal, light.to_light) > 0.0 {
-        let origin = offset_origin(t, position, light.to_light);
-        var t_max = F32_MAX;
-        if point_light {
-            t_max = length(params.light_a.xyz - origin);
-        }
-        if trace(origin, light.to_light, 0.0, t_max, true).triangle != MISS {
-            visibility = 0.0;
-        }
-    }
-    var m: MaterialSample;
-    m.albedo = mat.albedo.xyz;
-    m.specular = mat.specular.xyz;
-    m.shininess = mat.specular.w;
-    out.radiance = shade(m, normal, -dir, light, visibility, params.ambient.xyz);
-    return out;
+    return light;
 }
 
+const CAMERA: u32 = 0u;
+const SHADOW: u32 = 1u;
+const CENTRE: u32 = 2u;
+
+// One invocation per pixel. Its rays — per sample a camera ray, then its shadow ray when the
+// light is above the horizon; then the pixel-centre ray on the last dispatch — go through ONE
+// call of `trace_alpha` and one of `surface` in a loop: every call site of the traversal and
+// of the texture sampling is inlined by the driver's compiler, and three copies of them made
+// lavapipe's compile take minutes. The arithmetic per ray is surface.rs's.
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let width = params.size.x;
@@ -214,21 +198,99 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = id.y * width + id.x;
     let corner = vec2<f32>(f32(id.x), f32(id.y));
     let spp = params.size.z;
+    let eye = params.eye.xyz;
     var acc = sums[pixel];
     var sum = acc.xyz;
     var hits = acc.w;
-    for (var s = params.samples.x; s < params.samples.y; s++) {
-        let jitter = vec2<f32>(
-            rand_f32(pixel, s, params.streams.x),
-            rand_f32(pixel, s, params.streams.y),
-        );
-        let dir = ray_dir(corner + stratified(s, spp, jitter));
-        let r = camera_sample(dir);
-        sum += r.radiance;
-        hits += select(0.0, 1.0, r.hit);
+    var s = params.samples.x;
+    var centre_pending = params.samples.z == 1u;
+    // The camera sample waiting for its shadow ray.
+    var shadow_pending = false;
+    var origin = vec3<f32>(0.0);
+    var shadow_t_max = F32_MAX;
+    var dir = vec3<f32>(0.0);
+    var normal = vec3<f32>(0.0);
+    var light: LightSample;
+    var m: MaterialSample;
+    loop {
+        var stage = CAMERA;
+        var o = eye;
+        var d = vec3<f32>(0.0);
+        var t_max = F32_MAX;
+        var ray = primary_ray(pixel, s);
+        if shadow_pending {
+            stage = SHADOW;
+            o = origin;
+            d = light.to_light;
+            t_max = shadow_t_max;
+            ray = AlphaRay(pixel, s, params.streams.w);
+        } else if s < params.samples.y {
+            let jitter = vec2<f32>(
+                rand_f32(pixel, s, params.streams.x),
+                rand_f32(pixel, s, params.streams.y),
+            );
+            dir = ray_dir(corner + stratified(s, spp, jitter));
+            d = dir;
+        } else if centre_pending {
+            stage = CENTRE;
+            dir = ray_dir(corner + vec2<f32>(0.5));
+            d = dir;
+            ray = primary_ray(pixel, CENTRE_SAMPLE);
+        } else {
+            break;
+        }
+        let h = trace_alpha(o, d, 0.0, t_max, stage == SHADOW, ray);
+        var visibility = 1.0;
+        if stage == SHADOW {
+            shadow_pending = false;
+            if h.triangle != MISS {
+                visibility = 0.0;
+            }
+        } else if h.triangle == MISS {
+            if stage == CENTRE {
+                var g: GTexel;
+                g.depth = bitcast<f32>(0x7f800000u); // +inf, as the CPU writes
+                g.triangle = MISS;
+                gbuffer[pixel] = g;
+                centre_pending = false;
+            } else {
+                sum += params.background.xyz;
+                s += 1u;
+            }
+            continue;
+        } else {
+            let sp = surface(h, dir);
+            if stage == CENTRE {
+                var g: GTexel;
+                g.position = sp.position;
+                g.depth = h.t;
+                g.normal = sp.normal;
+                g.coverage = 1.0;
+                g.albedo = sp.material.albedo;
+                g.triangle = h.triangle;
+                gbuffer[pixel] = g;
+                centre_pending = false;
+                continue;
+            }
+            hits += 1.0;
+            normal = sp.normal;
+            m.albedo = sp.material.albedo;
+            m.specular = sp.material.specular;
+            m.shininess = sp.material.shininess;
+            light = light_at(sp.position);
+            // One shadow ray (surface.rs `radiance`), from the offset origin.
+            if (params.size.w & 1u) != 0u && dot(normal, light.to_light) > 0.0 {
+                origin = offset_origin(shade_tris[h.triangle], sp.position, light.to_light);
+                shadow_t_max = F32_MAX;
+                if (params.size.w & 2u) != 0u {
+                    shadow_t_max = length(params.light_a.xyz - origin);
+                }
+                shadow_pending = true;
+                continue;
+            }
+        }
+        sum += shade(m, normal, -dir, light, visibility, params.ambient.xyz);
+        s += 1u;
     }
     sums[pixel] = vec4<f32>(sum, hits);
-    if params.samples.z == 1u {
-        gbuffer[pixel] = centre_texel(ray_dir(corner + vec2<f32>(0.5)));
-    }
 }

@@ -8,17 +8,25 @@
 //! ([`crate::random`]: the same PCG3D counters, equal bit for bit), so both backends send the
 //! same rays up to float rounding.
 //!
-//! # What it covers (partial)
-//! Opaque, untextured materials (base colour, Blinn-Phong specular, double-sided), directional
-//! and point lights, shadows, ambient: every material of the builtin scenes except the
-//! alpha-masked textured leaves of `forest` (`alpha=false` gives its untextured leaves). A
-//! scene with a base-colour texture or an alpha mode other than opaque is refused with
-//! [`Error::Unsupported`], never rendered differently. The pixel-centre G-buffer is produced
-//! as on the CPU (voxlod-cpu's [`GTexel`], the same `#[repr(C)]` type, mirrored in WGSL), by
-//! the last dispatch.
+//! # What it covers
+//! Every material of voxlod-scene: base colour factor × base-colour texture (bilinear, wrap
+//! modes, sRGB decode: [`crate::material`], bit for bit the CPU's addressing and decoding),
+//! Blinn-Phong specular, double-sided, and the alpha modes as voxlod-cpu's `surface.rs` applies
+//! them to camera **and** shadow rays inside the BVH walk (`bvh_alpha.wgsl`): `Mask` keeps a
+//! hit where the sampled alpha reaches the cutoff, `Blend` keeps a hit on triangle `t` when
+//! `rand_f32(pixel, sample, key ^ t) < alpha` with the CPU's keys (camera, shadow) and sample
+//! indices (the pixel-centre ray uses `u32::MAX`), so both backends cut the same holes.
+//! Directional and point lights, shadows, ambient. What is still refused with
+//! [`Error::Unsupported`]: a host-side light filter ([`Options::light_filter`]). Textures must
+//! fit the device's storage binding and have edges ≤ [`crate::material::MAX_TEXTURE_EDGE`]
+//! (errors with the numbers). The pixel-centre G-buffer is produced as on the CPU (voxlod-cpu's
+//! [`GTexel`], the same `#[repr(C)]` type, mirrored in WGSL; albedo textured), by the last
+//! dispatch.
 //!
 //! # Kernel (what a real GPU sees)
-//! One invocation per pixel in 8×8 workgroups: neighbouring camera rays are coherent, so they
+//! One invocation per pixel in 8×8 workgroups, its rays (camera, shadow, pixel centre) cast
+//! from one call site of the traversal in a loop, because drivers inline every call site (three
+//! copies of the alpha-tested walk and the texture sampling took lavapipe minutes to compile): neighbouring camera rays are coherent, so they
 //! walk the same BVH nodes and share cache lines; shadow rays toward one light are coherent
 //! too. Each dispatch covers a range of samples of every pixel (at most
 //! [`RAYS_PER_DISPATCH`] camera rays in all) and adds them in sample order to a running sum per
@@ -30,7 +38,9 @@
 //! The rays agree up to float rounding (WGSL's division and `normalize` are accurate to a few
 //! ULP, and a compiler may fuse multiply-adds), so a sample whose camera ray grazes a triangle
 //! edge, or whose shadow ray grazes a blocker's edge, may hit on one backend and miss on the
-//! other; every other sample agrees to about 1e-6 relative. The suite compares 8-bit sRGB
+//! other; so may a sample whose alpha lands within a few ULP of a mask cutoff or of its blend
+//! test's random number (the texture lerp may be fused on the GPU); every other sample agrees
+//! to about 1e-6 relative. The suite compares 8-bit sRGB
 //! images with a per-pixel bound and the fraction of pixels that must meet it.
 
 use glam::{Vec3, Vec4};
@@ -41,6 +51,7 @@ use voxlod_cpu::render::ground_truth::{
 use voxlod_cpu::render::sampling::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
+use crate::material::{MaterialBuffers, gpu_materials};
 use crate::raycast::{GpuBvh, entry, upload_bvh};
 use crate::{Context, Error, Result, light_words};
 
@@ -48,7 +59,9 @@ use crate::{Context, Error, Result, light_words};
 pub const WGSL: &str = concat!(
     include_str!("../random/random.wgsl"),
     include_str!("../shading.wgsl"),
+    include_str!("../material/material.wgsl"),
     include_str!("../bvh.wgsl"),
+    include_str!("../bvh_alpha.wgsl"),
     include_str!("ground_truth.wgsl")
 );
 
@@ -75,7 +88,8 @@ pub struct GpuGroundTruthParams {
     pub light_a: [f32; 4],
     /// Directional light: irradiance; point light: intensity.
     pub light_b: [f32; 4],
-    /// Width, height, samples per pixel, flags (1: shadows, 2: point light).
+    /// Width, height, samples per pixel, flags (1: shadows, 2: point light, 4: a material
+    /// is alpha-masked or blended, so hits go through the alpha test).
     pub size: [u32; 4],
     /// First and end sample of this dispatch.
     pub samples: [u32; 4],
@@ -99,41 +113,10 @@ pub struct GpuShadeTri {
     pub n1: [f32; 4],
     /// Shading normal at vertex 2.
     pub n2: [f32; 4],
-}
-
-/// A material as the kernel evaluates it (mirrors WGSL `Material`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuMaterial {
-    /// Linear albedo, clamped to \[0, 1\]; `w` = 1 if double-sided.
-    pub albedo: [f32; 4],
-    /// Specular colour; `w` = shininess.
-    pub specular: [f32; 4],
-}
-
-/// The materials of `scene` for the kernel, or [`Error::Unsupported`] for a textured or
-/// non-opaque material (see the module docs).
-pub fn gpu_materials(scene: &Scene) -> Result<Vec<GpuMaterial>> {
-    scene
-        .materials
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            if m.base_color_texture.is_some() || m.alpha_mode != AlphaMode::Opaque {
-                return Err(Error::Unsupported {
-                    what: "textured or alpha-masked/blended materials in the ground-truth \
-                           kernel (opaque untextured materials only)",
-                });
-            }
-            // The CPU's own evaluation (clamping included); UV is irrelevant untextured.
-            let s = scene.material_sample(i as u32, glam::Vec2::ZERO);
-            let flag = if m.double_sided { 1.0 } else { 0.0 };
-            Ok(GpuMaterial {
-                albedo: s.albedo.extend(flag).to_array(),
-                specular: s.specular.extend(s.shininess).to_array(),
-            })
-        })
-        .collect()
+    /// UVs of vertices 0 (`xy`) and 1 (`zw`).
+    pub uv01: [f32; 4],
+    /// UV of vertex 2 (`xy`).
+    pub uv2: [f32; 4],
 }
 
 /// The per-triangle shading data of `geometry` (validated by the caller: indices in range).
@@ -143,6 +126,7 @@ pub fn gpu_shade_tris(geometry: &Geometry) -> Vec<GpuShadeTri> {
             let [a, b, c] = geometry.triangle(t);
             let [i, j, k] = geometry.indices[t].map(|i| i as usize);
             let n = |v: usize| geometry.normals[v].extend(0.0).to_array();
+            let uv = |v: usize| geometry.uvs[v];
             GpuShadeTri {
                 p0: a.extend(f32::from_bits(geometry.materials[t])).to_array(),
                 p1: b.extend(0.0).to_array(),
@@ -150,6 +134,8 @@ pub fn gpu_shade_tris(geometry: &Geometry) -> Vec<GpuShadeTri> {
                 n0: n(i),
                 n1: n(j),
                 n2: n(k),
+                uv01: [uv(i).x, uv(i).y, uv(j).x, uv(j).y],
+                uv2: [uv(k).x, uv(k).y, 0.0, 0.0],
             }
         })
         .collect()
@@ -159,7 +145,8 @@ pub fn gpu_shade_tris(geometry: &Geometry) -> Vec<GpuShadeTri> {
 pub struct GpuScene {
     bvh: GpuBvh,
     shade_tris: wgpu::Buffer,
-    materials: wgpu::Buffer,
+    materials: MaterialBuffers,
+    any_alpha: bool,
     light: Light,
     background: Vec3,
 }
@@ -191,8 +178,9 @@ impl<'a> GroundTruthKernel<'a> {
     }
 
     /// Uploads `scene` (flattened to `geometry`, with `bvh` over it) after the CPU renderer's
-    /// checks on them ([`validate`], with a trivially valid camera and options), and refuses
-    /// materials the kernel does not cover.
+    /// checks on them ([`validate`], with a trivially valid camera and options), with its
+    /// materials and textures ([`crate::material`]: an error with the numbers for textures
+    /// over the device's storage limits or the exact-addressing edge).
     pub fn upload(&self, scene: &Scene, geometry: &Geometry, bvh: &Bvh) -> Result<GpuScene> {
         let probe = Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0);
         let options = Options { width: 1, height: 1, spp: 1, ..Options::default() };
@@ -203,7 +191,8 @@ impl<'a> GroundTruthKernel<'a> {
         Ok(GpuScene {
             bvh: upload_bvh(ctx, bvh, geometry)?,
             shade_tris: ctx.storage_init("shading triangles", bytemuck::cast_slice(&tris))?,
-            materials: ctx.storage_init("materials", bytemuck::cast_slice(&materials))?,
+            materials: materials.upload(ctx)?,
+            any_alpha: scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque),
             light: scene.light().validated().map_err(voxlod_cpu::Error::from)?,
             background: scene.background,
         })
@@ -234,7 +223,8 @@ impl<'a> GroundTruthKernel<'a> {
         let texel_bytes = pixels * size_of::<GTexel>() as u64;
         let gbuffer = ctx.storage_zeroed("ground-truth G-buffer", texel_bytes)?;
         let (point, la, lb) = light_words(&scene.light);
-        let flags = u32::from(shadows) | if point { 2 } else { 0 };
+        let flags =
+            u32::from(shadows) | if point { 2 } else { 0 } | if scene.any_alpha { 4 } else { 0 };
         let per_dispatch = (self.rays_per_dispatch / pixels).clamp(1, spp as u64) as u32;
         let layout = self.pipeline.get_bind_group_layout(0);
         let mut first = 0;
@@ -268,9 +258,11 @@ impl<'a> GroundTruthKernel<'a> {
                         entry(1, &scene.bvh.nodes),
                         entry(2, &scene.bvh.tris),
                         entry(3, &scene.shade_tris),
-                        entry(4, &scene.materials),
+                        entry(4, &scene.materials.materials),
                         entry(5, &sums),
                         entry(6, &gbuffer),
+                        entry(7, &scene.materials.textures),
+                        entry(8, &scene.materials.texels),
                     ],
                 })
             })?;
@@ -336,6 +328,22 @@ mod tests {
         assert!(err.to_string().contains("light filter"), "{err}");
     }
 
+    /// `trace_alpha` walks the BVH exactly as `trace` does: the node part of its loop is the
+    /// same text (only the primitive loop, where the alpha test goes, differs).
+    #[test]
+    fn the_alpha_walk_is_the_plain_walk() {
+        let node_walk = |src: &str, f: &str| {
+            let body = &src[src.find(f).expect("the function")..];
+            let start = body.find("        if (current.y & 0xff000000u) != 0u {").unwrap();
+            let end = body[start..].find("    return best;").unwrap();
+            body[start..start + end].to_string()
+        };
+        let plain = node_walk(include_str!("../bvh.wgsl"), "fn trace(");
+        let alpha = node_walk(include_str!("../bvh_alpha.wgsl"), "fn trace_alpha(");
+        assert!(plain.len() > 500);
+        assert_eq!(plain, alpha);
+    }
+
     #[test]
     fn ground_truth_types_mirror_their_wgsl() {
         type P = GpuGroundTruthParams;
@@ -368,6 +376,8 @@ mod tests {
                 ("n0", offset_of!(GpuShadeTri, n0)),
                 ("n1", offset_of!(GpuShadeTri, n1)),
                 ("n2", offset_of!(GpuShadeTri, n2)),
+                ("uv01", offset_of!(GpuShadeTri, uv01)),
+                ("uv2", offset_of!(GpuShadeTri, uv2)),
             ],
         );
         assert_mirrors(
@@ -383,26 +393,5 @@ mod tests {
                 ("triangle", offset_of!(GTexel, triangle)),
             ],
         );
-        assert_mirrors(
-            WGSL,
-            "Material",
-            size_of::<GpuMaterial>(),
-            &[
-                ("albedo", offset_of!(GpuMaterial, albedo)),
-                ("specular", offset_of!(GpuMaterial, specular)),
-            ],
-        );
-    }
-
-    #[test]
-    fn textured_and_alpha_materials_are_refused_not_approximated() {
-        use voxlod_scene::{Material, TextureRef};
-        let mut scene = Scene { materials: vec![Material::default()], ..Default::default() };
-        assert_eq!(gpu_materials(&scene).unwrap().len(), 1);
-        scene.materials[0].alpha_mode = AlphaMode::Blend;
-        assert!(matches!(gpu_materials(&scene), Err(Error::Unsupported { .. })));
-        scene.materials[0].alpha_mode = AlphaMode::Opaque;
-        scene.materials[0].base_color_texture = Some(TextureRef { texture: 0 });
-        assert!(matches!(gpu_materials(&scene), Err(Error::Unsupported { .. })));
     }
 }

@@ -1,6 +1,6 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
-//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`ground_truth`], [`filtered`],
+//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`materials`], [`ground_truth`], [`filtered`],
 //! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
@@ -16,6 +16,7 @@ mod filtered;
 mod ground_truth;
 mod harness;
 mod images;
+mod materials;
 mod octree;
 mod precompute;
 mod random;
@@ -46,7 +47,9 @@ fn equivalence_suite() {
         suite.run("raycast (scenes)", backend, raycast::scenes);
         suite.run("raycast (proptest)", backend, raycast::property);
         suite.run("random (exact)", backend, random::exact);
+        suite.run("materials (exact)", backend, materials::exact);
         suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
+        suite.run("ground truth (textures)", backend, ground_truth::textured);
         suite.run("ground truth (proptest)", backend, ground_truth::property);
         suite.run("ground truth (dispatches)", backend, ground_truth::dispatch_split);
         suite.run("filtered Averages (scenes)", backend, filtered::averages_scenes);
