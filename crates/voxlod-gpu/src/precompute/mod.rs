@@ -86,7 +86,7 @@ use voxlod_format::records::{AverageRecord, SpecularRecord};
 use voxlod_format::{BrickMap, morton};
 use voxlod_scene::{AlphaMode, Geometry, Scene};
 
-use crate::ground_truth::{GpuMaterial, gpu_materials, gpu_shade_tris};
+use crate::ground_truth::gpu_shade_tris;
 use crate::raycast::entry;
 use crate::{Context, Error, Result};
 
@@ -422,6 +422,18 @@ impl<'a> Precomputer<'a> {
     }
 }
 
+/// An untextured material as the precompute kernel reads it (mirrors WGSL `Material` of
+/// `precompute.wgsl`): the CPU's own `material_sample`, which does not depend on the UV
+/// without a texture.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuMaterial {
+    /// Linear albedo, clamped to \[0, 1\]; `w` = 1 if double-sided.
+    pub albedo: [f32; 4],
+    /// Specular colour; `w` = shininess.
+    pub specular: [f32; 4],
+}
+
 /// The GPU materials of `scene`, or [`Error::Unsupported`] for textured or alpha materials.
 fn check_materials(scene: &Scene) -> Result<Vec<GpuMaterial>> {
     if scene
@@ -434,7 +446,17 @@ fn check_materials(scene: &Scene) -> Result<Vec<GpuMaterial>> {
                    untextured materials only; use voxlod_cpu::appearance::precompute)",
         });
     }
-    gpu_materials(scene)
+    Ok((0..scene.materials.len())
+        .map(|i| {
+            // The CPU's own evaluation (clamping included); UV is irrelevant untextured.
+            let s = scene.material_sample(i as u32, glam::Vec2::ZERO);
+            let flag = if scene.materials[i].double_sided { 1.0 } else { 0.0 };
+            GpuMaterial {
+                albedo: s.albedo.extend(flag).to_array(),
+                specular: s.specular.extend(s.shininess).to_array(),
+            }
+        })
+        .collect())
 }
 
 /// The kernel's voxels and their local triangles, set up as the CPU sampler's
