@@ -409,7 +409,7 @@ impl<'a> ConeKernel<'a> {
     }
 
     /// Traces `query` from every point of `points`, laid out as an image `width` points wide
-    /// (rows of 8×8 workgroups; the last row may be partial): per point what [`reference`]
+    /// (rows of 8×8 workgroups; the last row may be partial): per point what [`reference()`]
     /// computes on the CPU. Errors: `options` outside their ranges (voxlod-cone's error), a
     /// zero `width` with points, and the device's limits.
     pub fn trace(

@@ -668,6 +668,17 @@ mod tests {
                 ("n0", offset_of!(GpuShadeTri, n0)),
                 ("n1", offset_of!(GpuShadeTri, n1)),
                 ("n2", offset_of!(GpuShadeTri, n2)),
+                ("uv01", offset_of!(GpuShadeTri, uv01)),
+                ("uv2", offset_of!(GpuShadeTri, uv2)),
+            ],
+        );
+        assert_mirrors(
+            WGSL,
+            "Material",
+            size_of::<GpuMaterial>(),
+            &[
+                ("albedo", offset_of!(GpuMaterial, albedo)),
+                ("specular", offset_of!(GpuMaterial, specular)),
             ],
         );
     }

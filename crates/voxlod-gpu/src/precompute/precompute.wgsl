@@ -36,6 +36,8 @@ struct ShadeTri {
     n0: vec4<f32>,
     n1: vec4<f32>,
     n2: vec4<f32>,
+    uv01: vec4<f32>, // UVs of vertices 0 (xy) and 1 (zw)
+    uv2: vec4<f32>,  // UV of vertex 2 (xy)
 }
 
 struct Material {
