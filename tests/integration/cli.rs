@@ -336,10 +336,8 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
     assert!(out.status.success(), "{stderr}");
     let forest: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(forest[0]["gt_backend"], adapter.as_str(), "{forest}");
-    let averages: Vec<_> = filtered(&forest[0])
-        .into_iter()
-        .filter(|r| r["method"] == "Averages")
-        .collect();
+    let averages: Vec<_> =
+        filtered(&forest[0]).into_iter().filter(|r| r["method"] == "Averages").collect();
     assert!(!averages.is_empty(), "{forest}");
     for r in &averages {
         assert_eq!(r["precompute_backend"], adapter.as_str(), "{r}");

@@ -675,6 +675,38 @@ mod tests {
         );
     }
 
+    /// `prepare` flags the triangles of non-`Opaque` materials (their hits pass the alpha
+    /// test in the kernel) next to the flat-axis bits, and no others.
+    #[test]
+    fn prepare_flags_the_triangles_whose_alpha_filters_hits() {
+        use voxlod_cpu::voxelize::{Options, voxelize};
+        use voxlod_format::GridSpec;
+        use voxlod_scene::{Material, Mesh};
+        let tri = |z: f32, material| Mesh {
+            name: "t".into(),
+            positions: vec![Vec3::new(0.1, 0.1, z), Vec3::new(0.9, 0.1, z), Vec3::new(0.1, 0.9, z)],
+            normals: vec![Vec3::Z; 3],
+            uvs: vec![glam::Vec2::ZERO; 3],
+            indices: vec![[0, 1, 2]],
+            material,
+            ..Default::default()
+        };
+        let blend = Material { alpha_mode: AlphaMode::Blend, ..Default::default() };
+        let scene = Scene {
+            meshes: vec![tri(0.3, 0), tri(0.6, 1)],
+            materials: vec![Material::default(), blend],
+            ..Default::default()
+        };
+        let geometry = scene.geometry();
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, glam::UVec3::ONE).unwrap();
+        let vox = voxelize(&geometry, &grid, &Options::default()).unwrap();
+        let sampling = SamplingContext::new(&scene, &geometry, &vox).unwrap();
+        let (_, tris) = prepare(&sampling, &scene, &geometry).unwrap();
+        let flags: Vec<u32> = tris.iter().map(|t| t.a[3].to_bits()).collect();
+        // Both lie in a z plane (flat-axis bit 2); only the blended one is alpha-filtered.
+        assert_eq!(flags, [4, 4 | ALPHA_FLAG]);
+    }
+
     /// The host fit from sums is the CPU's fit from lines: mean albedo, normalized sum, the
     /// principal axis when the normals cancel, `occluded / rays`.
     #[test]

@@ -22,7 +22,7 @@ struct Voxel {
 // A triangle of one voxel in voxel-local coordinates, set up on the host in f64 exactly as the
 // CPU sampler sets it up, then rounded to f32.
 struct Tri {
-    a: vec4<f32>,  // vertex 0; w = bits: flat-axis mask (bits 0..3), 8 if the material's alpha filters hits
+    a: vec4<f32>,  // vertex 0; w = bits: flat-axis mask (bits 0..3), | 8 if alpha-filtered
     n: vec4<f32>,  // unit plane normal; w = offset (n·p = offset on the plane)
     bu: vec4<f32>, // barycentric plane of vertex 1; w = cu
     bv: vec4<f32>, // barycentric plane of vertex 2; w = cv
