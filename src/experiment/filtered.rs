@@ -94,10 +94,9 @@ pub struct MethodRow {
     /// the JSON) in an all-CPU run, whose output is unchanged.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub backend: Option<String>,
-    /// What precomputed the row's records: the GPU adapter's short name (Averages, whose
-    /// precompute has a GPU kernel, unless the scene's materials are textured or alpha-tested,
-    /// which it refuses: then `cpu`), else `cpu`. None (and left out of the JSON) in an
-    /// all-CPU run.
+    /// What precomputed the row's records: the GPU adapter's short name for Averages (whose
+    /// precompute has a GPU kernel for every scene, textured and alpha-tested materials
+    /// included), else `cpu`. None (and left out of the JSON) in an all-CPU run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub precompute_backend: Option<String>,
 }
@@ -197,9 +196,10 @@ pub(super) fn run(
 
 /// Precomputes every representation from the same samples (each timed on its own: its
 /// precompute time is sampling plus its fit); with `gpu`, precomputes Averages on the adapter
-/// (`voxlod_gpu::precompute`, the same lines as the CPU's; the row names it) and uploads the
-/// records that have a GPU kernel (untimed). A scene whose materials the GPU precompute
-/// refuses (textured, alpha-tested) is precomputed on the CPU, and its row says `cpu`.
+/// (`voxlod_gpu::precompute`, the same lines as the CPU's, every material kind: textured,
+/// alpha-masked and alpha-blended included; the row names it) and uploads the records that
+/// have a GPU kernel (untimed). There is no CPU path behind it: what the kernel cannot serve
+/// (a device limit) is an error.
 fn build_all(
     ctx: &SamplingContext<'_>,
     geometry: &Geometry,
@@ -221,13 +221,7 @@ fn build_all(
                 &opts,
                 voxlod_gpu::precompute::Outputs::default(),
             );
-            match run {
-                Ok(r) => (r.averages, Some(k.kernels.name.clone())),
-                Err(voxlod_gpu::Error::Unsupported { .. }) => {
-                    (precompute(ctx, &opts, averages::fit)?, None)
-                }
-                Err(e) => return Err(e.into()),
-            }
+            (run?.averages, Some(k.kernels.name.clone()))
         }
         None => (precompute(ctx, &opts, averages::fit)?, None),
     };

@@ -2,10 +2,10 @@
 //! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
 //! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
 //! Every row says which backend rendered it, and which precomputed its records: Averages is
-//! precomputed on the adapter too (`voxlod_gpu::precompute`, opaque untextured materials;
-//! other scenes' Averages are precomputed on the CPU and their rows say `cpu`), the other
-//! representations on the CPU. Nothing else falls back: a scene the GPU ground truth refuses
-//! (textures over the device's limits, say) is an error naming the scene.
+//! precomputed on the adapter too (`voxlod_gpu::precompute`, for every scene: textured,
+//! alpha-masked and alpha-blended materials included), the other representations on the CPU.
+//! Nothing falls back: a scene the GPU kernels cannot serve (textures over the device's
+//! limits, say) is an error naming the scene.
 
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::{BrickMap, GridSpec};
@@ -88,17 +88,14 @@ impl<'c> Kernels<'c> {
         let options = baseline::Options { width: 1, height: 1, ..Default::default() };
         let light = scene.light();
         drop(self.filtered.render_baseline(&empty, &camera, &light, Vec3::ZERO, &options)?);
-        // The precompute on the scene in one voxel, one line (a scene it refuses is
-        // precomputed on the CPU, see `filtered::build_all`).
+        // The precompute on the scene in one voxel, one line.
         let geometry = scene.geometry();
         let (lo, hi) = scene.bounds()?;
         let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 1)?;
         let vox = voxlod_cpu::voxelize::voxelize(&geometry, &grid, &Default::default())?;
         let opts = voxlod_cpu::appearance::precompute::PrecomputeOptions { rays: 1, seed: 0 };
-        match self.precompute.run(scene, &geometry, &vox, &opts, Default::default()) {
-            Ok(_) | Err(voxlod_gpu::Error::Unsupported { .. }) => Ok(()),
-            Err(e) => Err(e.into()),
-        }
+        self.precompute.run(scene, &geometry, &vox, &opts, Default::default())?;
+        Ok(())
     }
 }
 

@@ -325,7 +325,8 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
     }
 
     // The forest's alpha-masked textured leaves render on the GPU too (once refused): its
-    // ground truth comes from the adapter, not the CPU.
+    // ground truth comes from the adapter, not the CPU, and so do its Averages (the
+    // precompute serves textured and alpha-tested materials: no CPU fallback any more).
     let spec = "builtin:forest?trees=1&leaves=8";
     let args = ["compare", spec, "--res", "12", "--image", "0", "--spp", "4", "--views", "1"];
     let args = [&args[..], &["--rays", "16", "--thresholds", "0.2"]].concat();
@@ -335,5 +336,11 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
     assert!(out.status.success(), "{stderr}");
     let forest: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(forest[0]["gt_backend"], adapter.as_str(), "{forest}");
+    let averages: Vec<_> =
+        filtered(&forest[0]).into_iter().filter(|r| r["method"] == "Averages").collect();
+    assert!(!averages.is_empty(), "{forest}");
+    for r in &averages {
+        assert_eq!(r["precompute_backend"], adapter.as_str(), "{r}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,6 +1,6 @@
 //! Materials and textures on the GPU: [`WGSL`] is voxlod-scene's [`Material::sample`] and
 //! [`Texture::sample`] in WGSL (`material.wgsl`), for every kernel that evaluates a surface
-//! (the ground truth today; the per-voxel precompute can include it too), and [`GpuMaterials`]
+//! (the ground truth and the per-voxel precompute), and [`GpuMaterials`]
 //! the buffers it reads: one [`GpuMaterial`] per material, a descriptor table (the two 8-bit
 //! decode tables, then one [`GpuTextureDesc`] per texture: offset, width, height, sRGB and
 //! wrap flags) and every texture's RGBA8 texels in one `u32` array.

@@ -10,7 +10,12 @@
 //! in WGSL, so every line is drawn from the same random numbers as on the CPU), the closest
 //! hit of each whole line on the voxel's own triangles (ties to the lowest triangle id), the
 //! cases of the sampler's rules (occluded; inside the closed voxel and front-facing, or any
-//! side on double-sided materials, whose shading normal is then flipped), and per voxel:
+//! side on double-sided materials, whose shading normal is then flipped), with the sampler's
+//! alpha rules (a hit on an `Opaque` material always counts, on a `Mask` material where its
+//! alpha at the hit's interpolated UV is > 0, on a `Blend` material on triangle `t` where
+//! `rand_f32(v, i, blend_key(seed) ^ t) < alpha`; the closest *accepted* hit wins, rejected
+//! hits do not occlude), the textured albedo, specular level and exponent of
+//! `Material::sample` at the hit's UV ([`crate::material`]'s WGSL), and per voxel:
 //! - the counts of occluded and case-(a) lines ([`VoxelStats`]);
 //! - the sums the Averages fit reads (albedo, shading normal, `Σ n nᵀ`, specular level and
 //!   level × exponent), reduced per workgroup in a fixed tree order; the host turns them into
@@ -30,9 +35,12 @@
 //! up in voxel-local coordinates on the host **in `f64`, exactly as the CPU sampler does**
 //! (plane, barycentric planes, flat axes; degenerate triangles dropped), then rounded to `f32`:
 //! 80 bytes per (voxel, triangle) pair. So the kernel's `f32` numbers are the CPU's own, and
-//! only the kernel's arithmetic can differ. Scenes with textured or alpha-tested/blended
-//! materials are refused with [`Error::Unsupported`] (the GPU materials are the ground-truth
-//! kernel's, opaque and untextured).
+//! only the kernel's arithmetic can differ. A triangle whose material is not `Opaque` carries
+//! a flag (bit 3 of its flat-axis word) so that the alpha test runs only on its hits. Every
+//! material kind is served: the materials, texture descriptors and texels are
+//! [`crate::material::gpu_materials`]' buffers; what cannot be served is a device limit (a
+//! texture edge over [`crate::material::MAX_TEXTURE_EDGE`], texels or triangles over a storage
+//! binding), an error with the numbers, never a fallback to the CPU.
 //!
 //! # Kernel (what a real GPU sees)
 //! One workgroup of [`WORKGROUP`] = 64 invocations per voxel; the invocations stride over the
@@ -40,8 +48,12 @@
 //! the same loop over the voxel's triangles, reading the same 80-byte triangle at the same
 //! time: a uniform (broadcast) load served from cache, so a voxel's triangles are fetched from
 //! memory about once, with no workgroup memory and no barrier in the loop. The only
-//! divergence is the booking of a hit (taken by the lines that hit) and the sub-cell loop
-//! (≤ 7 iterations). A line costs its set-up (5 PCG3D calls, two degree-12 polynomials, a
+//! divergence is the booking of a hit (taken by the lines that hit), the sub-cell loop
+//! (≤ 7 iterations) and, on alpha-filtered triangles only, the alpha test of a closer hit: the
+//! UV interpolation and a material evaluation (on a textured material four texel loads and
+//! ~100 integer operations of exact addressing, see [`crate::material`]), plus one PCG3D call
+//! on `Blend`; booking a surface hit evaluates the material once more for its albedo. A line
+//! costs its set-up (5 PCG3D calls, two degree-12 polynomials, a
 //! square root, 3 divisions for the chord) and about 25 flops per triangle of its voxel. The
 //! per-voxel reductions stay in the workgroup: integer counters with workgroup atomics, and
 //! the float sums (16 per invocation, 4 KiB of workgroup memory) added by invocation 0 in
@@ -73,13 +85,16 @@
 //! record byte may round the other way: ±1 in each byte where every line agrees. Measured
 //! on llvmpipe (the suite's scenes and 16 random soups: 1.1 M lines, 7.7 k voxels): every
 //! line's direction, entry and chord equal the CPU's bit for bit, no line changes case, and
-//! every record and subgrid byte equals the CPU's.
+//! every record and subgrid byte equals the CPU's. Textures and alpha add one inexact step,
+//! the bilinear lerp (a multiply-add may be fused: a few ULP): an alpha within those ULP of a
+//! mask cutoff or of a blend number can flip a line, an albedo move by ULP; the UV itself is
+//! the CPU's expression in the CPU's order.
 
 use glam::{DVec3, Vec3};
 use voxlod_cpu::appearance::AppearanceGrid;
 use voxlod_cpu::appearance::eigen::symmetric_eigen;
 use voxlod_cpu::appearance::precompute::PrecomputeOptions;
-use voxlod_cpu::appearance::sampler::{SamplingContext, dimension_base};
+use voxlod_cpu::appearance::sampler::{SamplingContext, blend_key, dimension_base};
 use voxlod_cpu::appearance::samples::{RaySample, SurfaceSample, VoxelSamples};
 use voxlod_cpu::voxelize::Voxelization;
 use voxlod_format::records::{AverageRecord, SpecularRecord};
@@ -87,12 +102,16 @@ use voxlod_format::{BrickMap, morton};
 use voxlod_scene::{AlphaMode, Geometry, Scene};
 
 use crate::ground_truth::gpu_shade_tris;
+use crate::material::{GpuMaterial, gpu_materials};
 use crate::raycast::entry;
 use crate::{Context, Error, Result};
 
-/// The WGSL source of the kernel: the RNG, then the sampler.
-pub const WGSL: &str =
-    concat!(include_str!("../random/random.wgsl"), include_str!("precompute.wgsl"));
+/// The WGSL source of the kernel: the RNG, materials and textures, then the sampler.
+pub const WGSL: &str = concat!(
+    include_str!("../random/random.wgsl"),
+    include_str!("../material/material.wgsl"),
+    include_str!("precompute.wgsl")
+);
 
 /// Invocations per workgroup (one workgroup per voxel).
 pub const WORKGROUP: u32 = 64;
@@ -110,7 +129,8 @@ pub const LINES_PER_DISPATCH: u64 = 1 << 22;
 pub struct GpuPrecomputeParams {
     /// Voxels, lines per voxel, first voxel of the dispatch, flags (1: write the lines).
     pub counts: [u32; 4],
-    /// First random dimension (`8·seed`), voxels in the dispatch, 0, 0.
+    /// First random dimension (`8·seed`), voxels in the dispatch, blend key
+    /// (`blend_key(seed)`), 0.
     pub seed: [u32; 4],
 }
 
@@ -132,7 +152,7 @@ pub struct GpuVoxel {
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuLocalTri {
-    /// Vertex 0; `w` = bits of the flat-axis mask.
+    /// Vertex 0; `w` = bits of the flat-axis mask (bits 0..3) and [`ALPHA_FLAG`].
     pub a: [f32; 4],
     /// Unit plane normal; `w` = offset.
     pub n: [f32; 4],
@@ -143,6 +163,10 @@ pub struct GpuLocalTri {
     /// World geometric normal `(b−a)×(c−a)`; `w` = bits of the triangle id.
     pub ng: [f32; 4],
 }
+
+/// Set in [`GpuLocalTri::a`]'s `w` bits when the triangle's material is not `Opaque` (its hits
+/// pass the alpha test).
+pub const ALPHA_FLAG: u32 = 8;
 
 /// One voxel's results (mirrors WGSL `VoxelOut`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -174,6 +198,8 @@ pub struct GpuLineOut {
     pub point: [f32; 4],
     /// Shading normal of a surface hit.
     pub normal: [f32; 4],
+    /// Albedo of a surface hit (`Material::sample` at its UV).
+    pub albedo: [f32; 4],
 }
 
 /// The case of one sampling line (the sampler's rules).
@@ -212,7 +238,7 @@ pub struct VoxelStats {
 /// What [`Precomputer::run`] returns besides the Averages grid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
-    /// Also read back every line as [`VoxelSamples`] (64 bytes per line on the device).
+    /// Also read back every line as [`VoxelSamples`] (80 bytes per line on the device).
     pub lines: bool,
 }
 
@@ -305,10 +331,10 @@ impl<'a> Precomputer<'a> {
                 limit: (u32::MAX - WORKGROUP) as u64,
             });
         }
-        let materials = check_materials(scene)?;
+        let materials = gpu_materials(scene)?;
         let n = sampling.voxel_count();
         let rays = opts.rays;
-        let (voxels, tris) = prepare(&sampling, geometry)?;
+        let (voxels, tris) = prepare(&sampling, scene, geometry)?;
         if n as u64 > u32::MAX as u64 || tris.len() as u64 > u32::MAX as u64 {
             return Err(Error::TooLarge {
                 what: "voxels or (voxel, triangle) pairs (32-bit indices)",
@@ -331,7 +357,7 @@ impl<'a> Precomputer<'a> {
             let voxel_buf = ctx.storage_init("precompute voxels", bytemuck::cast_slice(&voxels))?;
             let tri_buf = ctx.storage_init("precompute triangles", bytemuck::cast_slice(&tris))?;
             let shade_buf = ctx.storage_init("shading triangles", bytemuck::cast_slice(&shade))?;
-            let mat_buf = ctx.storage_init("materials", bytemuck::cast_slice(&materials))?;
+            let mat_bufs = materials.upload(ctx)?;
             let out_bytes = n as u64 * size_of::<GpuVoxelOut>() as u64;
             let out_buf = ctx.storage_zeroed("precompute results", out_bytes)?;
             let line_bytes =
@@ -355,7 +381,7 @@ impl<'a> Precomputer<'a> {
                 }
                 let params = GpuPrecomputeParams {
                     counts: [n as u32, rays, first, u32::from(outputs.lines)],
-                    seed: [dimension_base(opts.seed), count, 0, 0],
+                    seed: [dimension_base(opts.seed), count, blend_key(opts.seed), 0],
                 };
                 let uniform = ctx.uniform("precompute params", bytemuck::bytes_of(&params))?;
                 let bind = ctx.guarded("binding precompute buffers", || {
@@ -367,9 +393,11 @@ impl<'a> Precomputer<'a> {
                             entry(1, &voxel_buf),
                             entry(2, &tri_buf),
                             entry(3, &shade_buf),
-                            entry(4, &mat_buf),
+                            entry(4, &mat_bufs.materials),
                             entry(5, &out_buf),
                             entry(6, &line_buf),
+                            entry(7, &mat_bufs.textures),
+                            entry(8, &mat_bufs.texels),
                         ],
                     })
                 })?;
@@ -413,7 +441,7 @@ impl<'a> Precomputer<'a> {
         let averages = AppearanceGrid { grid, records, specular: specular.then_some(side) };
         let (samples, cases) = if outputs.lines {
             let lines: Vec<GpuLineOut> = bytemuck::pod_collect_to_vec(&line_raw);
-            let (s, c) = to_samples(&lines, rays as usize, &materials, geometry);
+            let (s, c) = to_samples(&lines, rays as usize, &materials.materials, geometry);
             (Some(s), Some(c))
         } else {
             (None, None)
@@ -422,49 +450,16 @@ impl<'a> Precomputer<'a> {
     }
 }
 
-/// An untextured material as the precompute kernel reads it (mirrors WGSL `Material` of
-/// `precompute.wgsl`): the CPU's own `material_sample`, which does not depend on the UV
-/// without a texture.
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuMaterial {
-    /// Linear albedo, clamped to \[0, 1\]; `w` = 1 if double-sided.
-    pub albedo: [f32; 4],
-    /// Specular colour; `w` = shininess.
-    pub specular: [f32; 4],
-}
-
-/// The GPU materials of `scene`, or [`Error::Unsupported`] for textured or alpha materials.
-fn check_materials(scene: &Scene) -> Result<Vec<GpuMaterial>> {
-    if scene
-        .materials
-        .iter()
-        .any(|m| m.base_color_texture.is_some() || m.alpha_mode != AlphaMode::Opaque)
-    {
-        return Err(Error::Unsupported {
-            what: "textured or alpha-masked/blended materials in the GPU precompute (opaque \
-                   untextured materials only; use voxlod_cpu::appearance::precompute)",
-        });
-    }
-    Ok((0..scene.materials.len())
-        .map(|i| {
-            // The CPU's own evaluation (clamping included); UV is irrelevant untextured.
-            let s = scene.material_sample(i as u32, glam::Vec2::ZERO);
-            let flag = if scene.materials[i].double_sided { 1.0 } else { 0.0 };
-            GpuMaterial {
-                albedo: s.albedo.extend(flag).to_array(),
-                specular: s.specular.extend(s.shininess).to_array(),
-            }
-        })
-        .collect())
-}
-
 /// The kernel's voxels and their local triangles, set up as the CPU sampler's
-/// `load_triangles` does (in `f64` from the grid's origin and voxel size, then rounded).
+/// `load_triangles` does (in `f64` from the grid's origin and voxel size, then rounded), with
+/// [`ALPHA_FLAG`] on triangles of `scene`'s non-`Opaque` materials.
 pub fn prepare(
     sampling: &SamplingContext,
+    scene: &Scene,
     geometry: &Geometry,
 ) -> Result<(Vec<GpuVoxel>, Vec<GpuLocalTri>)> {
+    let alpha: Vec<bool> =
+        scene.materials.iter().map(|m| m.alpha_mode != AlphaMode::Opaque).collect();
     let vox = sampling.voxelization();
     let grid = sampling.grid();
     let inv = 1.0 / grid.voxel_size;
@@ -487,8 +482,12 @@ pub fn prepare(
             let bv = big_n.cross(e1) / area2;
             let n = big_n / area2.sqrt();
             let (fa, fb, fc) = (la.as_vec3(), lb.as_vec3(), lc.as_vec3());
-            let flat =
+            let mut flat =
                 (0..3).filter(|&j| fa[j] == fb[j] && fa[j] == fc[j]).fold(0u32, |m, j| m | 1 << j);
+            // Indices checked by SamplingContext::new.
+            if alpha[geometry.materials[t as usize] as usize] {
+                flat |= ALPHA_FLAG;
+            }
             let w = |v: DVec3, w: f32| v.as_vec3().extend(w).to_array();
             tris.push(GpuLocalTri {
                 a: fa.extend(f32::from_bits(flat)).to_array(),
@@ -544,8 +543,9 @@ fn specular_record(o: &GpuVoxelOut) -> SpecularRecord {
     SpecularRecord::new((level / count as f64) as f32, (weighted / level) as f32)
 }
 
-/// The GPU's lines as [`VoxelSamples`] (albedo, level and exponent from the material of the
-/// hit triangle, as the CPU's `material_sample` gives them untextured) and their cases.
+/// The GPU's lines as [`VoxelSamples`] (the kernel's textured albedo; level and exponent from
+/// the hit triangle's material, which `Material::sample` does not vary with the UV) and their
+/// cases.
 #[allow(clippy::type_complexity)]
 fn to_samples(
     lines: &[GpuLineOut],
@@ -571,7 +571,7 @@ fn to_samples(
                     SurfaceSample {
                         point: v3(&l.point),
                         normal: v3(&l.normal),
-                        albedo: v3(&m.albedo),
+                        albedo: v3(&l.albedo),
                         specular: (m.specular[0] + m.specular[1] + m.specular[2]) * (1.0 / 3.0),
                         shininess: m.specular[3],
                     }
@@ -654,6 +654,7 @@ mod tests {
                 ("entry", offset_of!(L, entry)),
                 ("point", offset_of!(L, point)),
                 ("normal", offset_of!(L, normal)),
+                ("albedo", offset_of!(L, albedo)),
             ],
         );
         use crate::ground_truth::GpuShadeTri;
@@ -672,28 +673,38 @@ mod tests {
                 ("uv2", offset_of!(GpuShadeTri, uv2)),
             ],
         );
-        assert_mirrors(
-            WGSL,
-            "Material",
-            size_of::<GpuMaterial>(),
-            &[
-                ("albedo", offset_of!(GpuMaterial, albedo)),
-                ("specular", offset_of!(GpuMaterial, specular)),
-            ],
-        );
     }
 
+    /// `prepare` flags the triangles of non-`Opaque` materials (their hits pass the alpha
+    /// test in the kernel) next to the flat-axis bits, and no others.
     #[test]
-    fn textured_and_alpha_materials_are_refused_naming_the_precompute() {
-        use voxlod_scene::{Material, TextureRef};
-        let mut scene = Scene { materials: vec![Material::default()], ..Default::default() };
-        assert_eq!(check_materials(&scene).unwrap().len(), 1);
-        scene.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
-        let err = check_materials(&scene).unwrap_err();
-        assert!(matches!(err, Error::Unsupported { .. }) && err.to_string().contains("precompute"));
-        scene.materials[0].alpha_mode = AlphaMode::Opaque;
-        scene.materials[0].base_color_texture = Some(TextureRef { texture: 0 });
-        assert!(matches!(check_materials(&scene), Err(Error::Unsupported { .. })));
+    fn prepare_flags_the_triangles_whose_alpha_filters_hits() {
+        use voxlod_cpu::voxelize::{Options, voxelize};
+        use voxlod_format::GridSpec;
+        use voxlod_scene::{Material, Mesh};
+        let tri = |z: f32, material| Mesh {
+            name: "t".into(),
+            positions: vec![Vec3::new(0.1, 0.1, z), Vec3::new(0.9, 0.1, z), Vec3::new(0.1, 0.9, z)],
+            normals: vec![Vec3::Z; 3],
+            uvs: vec![glam::Vec2::ZERO; 3],
+            indices: vec![[0, 1, 2]],
+            material,
+            ..Default::default()
+        };
+        let blend = Material { alpha_mode: AlphaMode::Blend, ..Default::default() };
+        let scene = Scene {
+            meshes: vec![tri(0.3, 0), tri(0.6, 1)],
+            materials: vec![Material::default(), blend],
+            ..Default::default()
+        };
+        let geometry = scene.geometry();
+        let grid = GridSpec::new(DVec3::ZERO, 1.0, glam::UVec3::ONE).unwrap();
+        let vox = voxelize(&geometry, &grid, &Options::default()).unwrap();
+        let sampling = SamplingContext::new(&scene, &geometry, &vox).unwrap();
+        let (_, tris) = prepare(&sampling, &scene, &geometry).unwrap();
+        let flags: Vec<u32> = tris.iter().map(|t| t.a[3].to_bits()).collect();
+        // Both lie in a z plane (flat-axis bit 2); only the blended one is alpha-filtered.
+        assert_eq!(flags, [4, 4 | ALPHA_FLAG]);
     }
 
     /// The host fit from sums is the CPU's fit from lines: mean albedo, normalized sum, the

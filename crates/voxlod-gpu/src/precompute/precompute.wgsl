@@ -1,12 +1,13 @@
 // The per-voxel ray sampler and its reductions (voxlod-cpu appearance/sampler.rs, subgrid.rs,
 // averages.rs): one workgroup of 64 invocations per voxel, striding over the voxel's lines.
-// Follows random.wgsl (rand_f32).
+// Follows random.wgsl (rand_f32) and material.wgsl (material_sample: textures, alpha modes).
 
 struct Params {
     // x = voxels in the voxelization, y = lines per voxel, z = first voxel of this dispatch,
     // w = flags (1: write every line to `lines`).
     counts: vec4<u32>,
-    // x = first random dimension (8·seed, wrapping), y = voxels in this dispatch.
+    // x = first random dimension (8·seed, wrapping), y = voxels in this dispatch,
+    // z = the blend key (sampler's blend_key(seed)).
     seed: vec4<u32>,
 }
 
@@ -21,14 +22,14 @@ struct Voxel {
 // A triangle of one voxel in voxel-local coordinates, set up on the host in f64 exactly as the
 // CPU sampler sets it up, then rounded to f32.
 struct Tri {
-    a: vec4<f32>,  // vertex 0; w = bits of the flat-axis mask
+    a: vec4<f32>,  // vertex 0; w = bits: flat-axis mask (bits 0..3), | 8 if alpha-filtered
     n: vec4<f32>,  // unit plane normal; w = offset (n·p = offset on the plane)
     bu: vec4<f32>, // barycentric plane of vertex 1; w = cu
     bv: vec4<f32>, // barycentric plane of vertex 2; w = cv
     ng: vec4<f32>, // world geometric normal (b−a)×(c−a); w = bits of the triangle id
 }
 
-// The ground-truth kernel's per-triangle shading data and materials (ground_truth/mod.rs).
+// The ground-truth kernel's per-triangle shading data (ground_truth/mod.rs).
 struct ShadeTri {
     p0: vec4<f32>, // w = bits of the material index
     p1: vec4<f32>,
@@ -36,13 +37,8 @@ struct ShadeTri {
     n0: vec4<f32>,
     n1: vec4<f32>,
     n2: vec4<f32>,
-    uv01: vec4<f32>, // UVs of vertices 0 (xy) and 1 (zw)
-    uv2: vec4<f32>,  // UV of vertex 2 (xy)
-}
-
-struct Material {
-    albedo: vec4<f32>,   // w = 1 if double-sided
-    specular: vec4<f32>, // w = shininess
+    uv01: vec4<f32>, // vertex UVs 0 (xy) and 1 (zw)
+    uv2: vec4<f32>,  // vertex UV 2 (xy)
 }
 
 // Per voxel: counts, the sums the Averages fit reads, and the 27 subgrid bytes.
@@ -61,6 +57,7 @@ struct LineOut {
     entry: vec4<f32>,  // w = bits of the case: 0 miss, 1 occluded without surface, 2 surface
     point: vec4<f32>,  // hit point (voxel-local); w = bits of the triangle id (all ones: none)
     normal: vec4<f32>, // shading normal of a surface hit
+    albedo: vec4<f32>, // textured albedo of a surface hit
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -70,6 +67,8 @@ struct LineOut {
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read_write> out: array<VoxelOut>;
 @group(0) @binding(6) var<storage, read_write> lines: array<LineOut>;
+@group(0) @binding(7) var<storage, read> textures: Textures;
+@group(0) @binding(8) var<storage, read> texels: array<u32>;
 
 const WG: u32 = 64u;
 const NONE: u32 = 0xffffffffu;
@@ -196,6 +195,29 @@ fn intersect(tri: Tri, e: vec3<f32>, d: vec3<f32>) -> Hit {
     return Hit(t, u, v, ok);
 }
 
+// Geometry::interpolate's UV: uv0·(1 − u − v) + uv1·u + uv2·v.
+fn hit_uv(t: ShadeTri, u: f32, v: f32) -> vec2<f32> {
+    let w = 1.0 - u - v;
+    return t.uv01.xy * w + t.uv01.zw * u + t.uv2.xy * v;
+}
+
+// sampler.rs `accepts` (module docs: alpha): whether a hit at barycentrics (u, v) on triangle
+// `triangle` counts for line `ray` of voxel `voxel`. Mask: the material's alpha at the hit's UV
+// is > 0 (i.e. ≥ cutoff); blend: rand_f32(voxel, ray, key ^ triangle) < alpha.
+fn accepts(triangle: u32, u: f32, v: f32, voxel: u32, ray: u32) -> bool {
+    let st = shade[triangle];
+    let m = bitcast<u32>(st.p0.w);
+    let mode = materials[m].alpha_mode;
+    if mode == 0u {
+        return true;
+    }
+    let alpha = material_alpha(m, hit_uv(st, u, v));
+    if mode == 2u {
+        return rand_f32(voxel, ray, params.seed.z ^ triangle) < alpha;
+    }
+    return alpha > 0.0;
+}
+
 // subgrid.rs subcell_of.
 fn subcell_of(p: vec3<f32>) -> u32 {
     let c = vec3<u32>(clamp(vec3<i32>(3.0 * p), vec3<i32>(0), vec3<i32>(2)));
@@ -291,9 +313,14 @@ fn main(
         // Every invocation reads the same triangle at the same time: a uniform (broadcast)
         // load, served from cache, with no workgroup memory and no barrier.
         for (var k = 0u; k < count; k++) {
-            let h = intersect(tris[vox.first + k], line.e, line.d);
-            // Strictly closer: a tie keeps the earlier triangle (the lowest id).
-            if h.hit && (best_k == NONE || h.t < best_t) {
+            let tri = tris[vox.first + k];
+            let h = intersect(tri, line.e, line.d);
+            // Strictly closer: a tie keeps the earlier triangle (the lowest id). A hit that the
+            // material's alpha rejects does not occlude (the test runs only on closer hits of
+            // alpha-filtered triangles, as on the CPU).
+            if h.hit && (best_k == NONE || h.t < best_t)
+                && ((bitcast<u32>(tri.a.w) & 8u) == 0u
+                    || accepts(bitcast<u32>(tri.ng.w), h.u, h.v, vox.id, j)) {
                 best_t = h.t;
                 best_u = h.u;
                 best_v = h.v;
@@ -305,6 +332,7 @@ fn main(
             var case_id = 0u;
             var point = vec3<f32>(0.0);
             var normal = vec3<f32>(0.0);
+            var albedo = vec3<f32>(0.0);
             var triangle = NONE;
             if best_k != NONE {
                 case_id = 1u;
@@ -319,8 +347,8 @@ fn main(
                 }
                 let inside = all(point >= vec3<f32>(0.0)) && all(point <= vec3<f32>(1.0));
                 let st = shade[triangle];
-                let m = materials[bitcast<u32>(st.p0.w)];
-                let double_sided = m.albedo.w > 0.5;
+                let mi = bitcast<u32>(st.p0.w);
+                let double_sided = materials[mi].double_sided != 0u;
                 let facing = dot3(tri.ng.xyz, line.d);
                 if inside && (double_sided || facing < 0.0) {
                     case_id = 2u;
@@ -340,9 +368,12 @@ fn main(
                     if double_sided && facing > 0.0 {
                         normal = -normal;
                     }
+                    // Material::sample at the interpolated UV: textured albedo, specular, exponent.
+                    let m = material_sample(mi, hit_uv(st, best_u, best_v));
+                    albedo = m.albedo;
                     let level = (m.specular.x + m.specular.y + m.specular.z) * ONE_THIRD_MEAN;
-                    s0 += vec4<f32>(m.albedo.xyz, level);
-                    s1 += vec4<f32>(normal, level * m.specular.w);
+                    s0 += vec4<f32>(albedo, level);
+                    s1 += vec4<f32>(normal, level * m.shininess);
                     let nx = normal.x * normal;
                     s2 += vec4<f32>(nx, normal.y * normal.y);
                     s3 += vec4<f32>(normal.y * normal.z, normal.z * normal.z, 0.0, 0.0);
@@ -367,6 +398,7 @@ fn main(
                     vec4<f32>(line.e, bitcast<f32>(case_id)),
                     vec4<f32>(point, bitcast<f32>(triangle)),
                     vec4<f32>(normal, 0.0),
+                    vec4<f32>(albedo, 0.0),
                 );
             }
         }
