@@ -81,6 +81,7 @@ use crate::{Context, Error, Result};
 pub const WGSL: &str = concat!(
     include_str!("../shading.wgsl"),
     include_str!("filtered.wgsl"),
+    include_str!("../subgrid.wgsl"),
     include_str!("vmesh.wgsl"),
     include_str!("voxels.wgsl"),
 );

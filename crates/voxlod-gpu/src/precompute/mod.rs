@@ -110,6 +110,7 @@ use crate::{Context, Error, Result};
 pub const WGSL: &str = concat!(
     include_str!("../random/random.wgsl"),
     include_str!("../material/material.wgsl"),
+    include_str!("../subgrid.wgsl"),
     include_str!("precompute.wgsl")
 );
 

@@ -73,7 +73,6 @@ struct LineOut {
 const WG: u32 = 64u;
 const NONE: u32 = 0xffffffffu;
 const F32_MAX: f32 = 3.402823466e+38f;
-const TOUCH: f32 = 1e-6f;
 // f32 constants as the CPU rounds them (9 significant digits: the decimal of one f32; WGSL
 // would fold `1.0 / 6.0` as an abstract float).
 const FRAC_PI_2: f32 = 1.570796371e0f; // 0x3fc90fdb
@@ -88,8 +87,6 @@ const C8: f32 = 2.480158764e-5f;       // 1/40320
 const C10: f32 = -2.755731998e-7f;     // -1/3628800
 const C12: f32 = 2.087675588e-9f;      // 1/479001600
 const HALF_STEP: f32 = 2.980232239e-8f; // 2^-25
-const THIRD: f32 = 3.333333433e-01f;     // 1.0f32 / 3.0
-const TWO_THIRDS: f32 = 6.666666865e-01f; // 2.0f32 / 3.0
 const ONE_THIRD_MEAN: f32 = 3.333333433e-01f; // 1.0f32 / 3.0 (specular level)
 
 // sampler/lines.rs sin_cos_turns: (sin 2πu, cos 2πu), the same polynomials and quadrant bits.
@@ -224,49 +221,6 @@ fn subcell_of(p: vec3<f32>) -> u32 {
     return c.x + 3u * c.y + 9u * c.z;
 }
 
-// subgrid.rs crossed_subcells: bit x + 3y + 9z for each sub-cell the segment e + t·d,
-// t ∈ [0, chord], overlaps over more than TOUCH (±1e30 for ±∞: every crossing compared with
-// it is at most the chord or at least 0).
-fn crossed_subcells(e: vec3<f32>, d: vec3<f32>, chord: f32) -> u32 {
-    if !(chord > TOUCH) {
-        return 0u;
-    }
-    var lo: array<vec3<f32>, 3>;
-    var hi: array<vec3<f32>, 3>;
-    for (var j = 0u; j < 3u; j++) {
-        if d[j] == 0.0 {
-            let home = u32(clamp(i32(3.0 * e[j]), 0, 2));
-            let is_home = vec3<u32>(0u, 1u, 2u) == vec3<u32>(home);
-            let l = select(vec3<f32>(1e30), vec3<f32>(-1e30), is_home);
-            lo[j] = l;
-            hi[j] = -l;
-        } else {
-            let inv = 1.0 / d[j];
-            let t0 = (0.0 - e[j]) * inv;
-            let t1 = (THIRD - e[j]) * inv;
-            let t2 = (TWO_THIRDS - e[j]) * inv;
-            let t3 = (1.0 - e[j]) * inv;
-            let a = vec3<f32>(t0, t1, t2);
-            let b = vec3<f32>(t1, t2, t3);
-            lo[j] = min(a, b);
-            hi[j] = max(a, b);
-        }
-    }
-    let lo_y = max(lo[1], vec3<f32>(0.0));
-    let hi_y = min(hi[1], vec3<f32>(chord));
-    var mask = 0u;
-    for (var z = 0u; z < 3u; z++) {
-        let l_yz = max(lo_y, vec3<f32>(lo[2][z]));
-        let h_yz = min(hi_y, vec3<f32>(hi[2][z]));
-        for (var y = 0u; y < 3u; y++) {
-            let len = min(hi[0], vec3<f32>(h_yz[y])) - max(lo[0], vec3<f32>(l_yz[y]));
-            let bits = select(0u, 1u, len.x > TOUCH) | select(0u, 2u, len.y > TOUCH)
-                | select(0u, 4u, len.z > TOUCH);
-            mask |= bits << (3u * y + 9u * z);
-        }
-    }
-    return mask;
-}
 
 var<workgroup> cell_rays: array<atomic<u32>, 27>;
 var<workgroup> cell_occluded: array<atomic<u32>, 27>;
