@@ -51,7 +51,10 @@ fn main() {
                     d + tracer.specular(p, n, (EYE - p).normalize(), 0.5).radiance
                 })
                 .collect();
-            println!("frame 320x180: checksum {:016x}", checksum(r.iter().flat_map(|v| v.to_array())));
+            println!(
+                "frame 320x180: checksum {:016x}",
+                checksum(r.iter().flat_map(|v| v.to_array()))
+            );
         }
         other => panic!("unknown work {other:?}: setup, diffuse or frame"),
     }

@@ -76,4 +76,3 @@ pub fn shading_points(geometry: &Octree<AveragePayload>, w: u32, h: u32) -> Vec<
         })
         .collect()
 }
-
