@@ -31,6 +31,7 @@ impl RadiancePayload {
 }
 
 impl Payload for RadiancePayload {
+    #[inline]
     fn empty() -> Self {
         Self::default()
     }

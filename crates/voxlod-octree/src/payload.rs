@@ -109,6 +109,7 @@ impl AveragePayload {
 }
 
 impl Payload for AveragePayload {
+    #[inline]
     fn empty() -> Self {
         Self::default()
     }
@@ -189,6 +190,7 @@ impl SggxPayload {
 }
 
 impl Payload for SggxPayload {
+    #[inline]
     fn empty() -> Self {
         Self::default()
     }
@@ -252,6 +254,7 @@ impl<P: Payload> Directional<P> {
 }
 
 impl<P: Payload> Payload for Directional<P> {
+    #[inline]
     fn empty() -> Self {
         Self { inner: P::empty(), opacity: [0.0; 6] }
     }

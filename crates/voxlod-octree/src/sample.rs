@@ -22,6 +22,18 @@ use voxlod_format::morton;
 use crate::octree::{NONE, Octree, sparse_neighbour};
 use crate::payload::Payload;
 
+/// `SPREAD_8[c]`: the 8 bits of `c` moved to bits `0, 3, 6, …, 21` (a Morton code's x bits),
+/// so that a dense-level node's code is `SPREAD_8[x] | SPREAD_8[y] << 1 | SPREAD_8[z] << 2`.
+static SPREAD_8: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut c = 0;
+    while c < 256 {
+        t[c] = morton::part1by2(c as u32) as u32;
+        c += 1;
+    }
+    t
+};
+
 impl<P: Payload> Octree<P> {
     /// The fractional level a footprint of `diameter` voxels samples (module docs).
     #[inline]
@@ -40,7 +52,8 @@ impl<P: Payload> Octree<P> {
     /// Quadrilinear sample at a fractional `level` in `[0, depth]` (clamped).
     pub fn sample_at_level(&self, pos: Vec3, level: f32) -> P {
         let level = if level.is_nan() { 0.0 } else { level.clamp(0.0, self.depth as f32) };
-        let l0 = level.floor() as u32;
+        // `level` is in [0, depth] here, so truncation is its floor (no libm `floorf` call).
+        let l0 = level as u32;
         let t = level - l0 as f32;
         let mut out = self.sample_level(pos, l0);
         if t > 0.0 && l0 < self.depth {
@@ -61,37 +74,85 @@ impl<P: Payload> Octree<P> {
     }
 
     /// Trilinear sample of one `level` (clamped to `depth`) at grid position `pos`.
+    ///
+    /// The arithmetic is, operation for operation, that of the plain formulation (kept as the
+    /// oracle of `tests/fast_sample.rs`, which checks bit-identical results): `u = pos·2^−l −
+    /// 0.5`, `b = ⌊u⌋`, `f = u − b`, corners `b + e` outside `[0, res)³` or absent skipped, and
+    /// `payload(b + e) · ((w_x·w_y)·w_z)` added for `e = 0..8` in order (index `x + 2y + 4z`),
+    /// `w = 1 − f` on the lower and `f` on the upper side. What is cheaper, and why it is exact:
+    /// - the test "outside the cube" is done on `u` instead of `⌊u⌋`: `⌊u⌋ < −1 ⇔ u < −1` and
+    ///   `⌊u⌋ ≥ res ⇔ u ≥ res` because `−1` and `res` are integers;
+    /// - inside, `−1 ≤ u < res ≤ 2²¹`, so `⌊u⌋` is the truncation `u as i32`, minus one where
+    ///   that lies above `u` (negative non-integers), with no libm `floorf` call (the build
+    ///   targets x86-64 without SSE4.1's `roundps`). The two differ only in the sign of a zero
+    ///   (`⌊−0⌋ = −0`), and `u` is never `−0`: `x − 0.5` is `+0` when `x = 0.5`;
+    /// - `2^−l` is built from its exponent bits rather than divided (`l ≤ 21`: a normal float,
+    ///   the same value as `1 / 2^l`);
+    /// - the corner weights share their products: `w_x·w_y` is computed once per `(x, y)`
+    ///   pair and reused for both `z`, the same two multiplications in the same order;
+    /// - on dense levels (the common case: every level of a ≤ 64³ scene by default) the eight
+    ///   Morton codes come from six 8-bit table lookups (`x`, `x + 1`, `y`, `y + 1`, `z`,
+    ///   `z + 1`, spread to every third bit) OR-ed together, instead of eight full encodes:
+    ///   dense levels are at most `2^MAX_DENSE_LOG2 = 256` nodes wide.
+    #[inline]
     pub fn sample_level(&self, pos: Vec3, level: u32) -> P {
         let level = level.min(self.depth);
         let mut out = P::empty();
         if !pos.is_finite() {
             return out;
         }
+        let lv = &self.levels[level as usize];
         let res = 1i32 << (self.depth - level);
-        let u = pos * (1.0 / (1u32 << level) as f32) - 0.5;
-        let lower = u.floor();
-        if lower.cmplt(Vec3::splat(-1.0)).any() || lower.cmpge(Vec3::splat(res as f32)).any() {
+        let inv_node = f32::from_bits((127 - level) << 23); // 2^−level, exactly 1 / 2^level
+        let u = pos * inv_node - 0.5;
+        let resf = res as f32;
+        if u.x < -1.0 || u.y < -1.0 || u.z < -1.0 || u.x >= resf || u.y >= resf || u.z >= resf {
             return out;
         }
-        let base = lower.as_ivec3();
-        let f = u - lower;
-        // The corner nodes, indexed by their offset (x + 2y + 4z) from `start`.
-        let start = base.max(IVec3::ZERO);
-        let nodes = self.corners(level, start.as_uvec3());
-        let lv = &self.levels[level as usize];
-        for e in 0..8u32 {
-            let off = IVec3::new((e & 1) as i32, (e >> 1 & 1) as i32, (e >> 2 & 1) as i32);
-            let c = base + off;
-            if c.cmplt(IVec3::ZERO).any() || c.cmpge(IVec3::splat(res)).any() {
-                continue;
+        let floor = |x: f32| {
+            let i = x as i32;
+            if i as f32 > x { i - 1 } else { i }
+        };
+        let base = IVec3::new(floor(u.x), floor(u.y), floor(u.z));
+        let f = u - base.as_vec3();
+        // Per axis: is the lower / upper corner inside [0, res)? (`base` is in [−1, res − 1].)
+        let inside = |b: i32| [b >= 0, b + 1 < res];
+        let (ix, iy, iz) = (inside(base.x), inside(base.y), inside(base.z));
+        let nodes: [u32; 8] = if lv.dense {
+            debug_assert!(lv.res_log2 <= crate::octree::MAX_DENSE_LOG2);
+            // Spread coordinates (clamped only to keep the lookup in the table; a clamped
+            // corner is outside and dropped below).
+            let spread = |b: i32, axis: u32| {
+                let s = |c: i32| SPREAD_8[c.clamp(0, 255) as usize] << axis;
+                [s(b), s(b + 1)]
+            };
+            let (sx, sy, sz) = (spread(base.x, 0), spread(base.y, 1), spread(base.z, 2));
+            std::array::from_fn(|e| {
+                let (x, y, z) = (e & 1, e >> 1 & 1, e >> 2 & 1);
+                if ix[x] && iy[y] && iz[z] { sx[x] | sy[y] | sz[z] } else { NONE }
+            })
+        } else {
+            // `corners` starts at `max(base, 0)`: a corner `e` is `start + (e − shift)`.
+            let start = base.max(IVec3::ZERO);
+            let shift = (start - base).as_uvec3();
+            let found = self.corners(level, start.as_uvec3());
+            std::array::from_fn(|e| {
+                let (x, y, z) = (e as u32 & 1, e as u32 >> 1 & 1, e as u32 >> 2 & 1);
+                if ix[x as usize] && iy[y as usize] && iz[z as usize] {
+                    found[(x - shift.x + 2 * (y - shift.y) + 4 * (z - shift.z)) as usize]
+                } else {
+                    NONE
+                }
+            })
+        };
+        let wx = [1.0 - f.x, f.x];
+        let wy = [1.0 - f.y, f.y];
+        let wz = [1.0 - f.z, f.z];
+        let wxy = [wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]];
+        for (e, &n) in nodes.iter().enumerate() {
+            if n != NONE {
+                out.add_scaled(&lv.payload[n as usize], wxy[e & 3] * wz[e >> 2]);
             }
-            let d = c - start;
-            let n = nodes[(d.x + 2 * d.y + 4 * d.z) as usize];
-            if n == NONE {
-                continue;
-            }
-            let w = Vec3::select(off.cmpeq(IVec3::ZERO), 1.0 - f, f).element_product();
-            out.add_scaled(&lv.payload[n as usize], w);
         }
         out
     }

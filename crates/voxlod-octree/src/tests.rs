@@ -4,6 +4,7 @@
 
 mod extremes;
 mod fast_build;
+mod fast_sample;
 mod invariants;
 mod oracle;
 
