@@ -13,8 +13,9 @@
 //!
 //! Layering: depends on `voxlod-octree` and `voxlod-format` only (no BVH, no GPU API). Shadows
 //! at injection are either marched through the geometry octree itself or given per leaf by the
-//! caller ([`Shadows`]). Not here yet: the wgpu kernel, Heitz–Neyret differential cone
-//! tracing.
+//! caller ([`Shadows`]). The wgpu kernel of the AO / diffuse / specular cones is voxlod-gpu's
+//! `cone` module (checked against [`ConeTracer`] by its equivalence suite). Not here yet:
+//! Heitz–Neyret differential cone tracing.
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
