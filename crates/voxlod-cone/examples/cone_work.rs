@@ -6,8 +6,8 @@
 //!
 //! `what`: `setup` (build, inject, shading points only), `diffuse` (plus one pass of AO + 6
 //! diffuse cones at 160×90, the `cone/diffuse` bench's work), `frame` (plus one 320×180 frame of
-//! 6 diffuse + 1 specular cones, the `frame/320x180` bench's work). Subtract `setup` from the
-//! others. Prints the cone steps and a checksum of the results (bit-identical code gives the
+//! 6 diffuse + 1 specular cones, the `frame/320x180` bench's work), `frame1280` (the same at
+//! 1280×720, the frame). Subtract `setup` from the others. Prints the cone steps and a checksum of the results (bit-identical code gives the
 //! same checksum).
 
 #[path = "../benches/common/mod.rs"]
@@ -42,9 +42,10 @@ fn main() {
             let sum = checksum(r.iter().flat_map(|(ao, d, _)| [*ao, d.x, d.y, d.z]));
             println!("diffuse 160x90: {steps} cone steps, checksum {sum:016x}");
         }
-        "frame" => {
-            let quarter = shading_points(&geometry, 320, 180);
-            let r: Vec<Vec3> = quarter
+        "frame" | "frame1280" => {
+            let (w, h) = if what == "frame" { (320, 180) } else { (1280, 720) };
+            let points = shading_points(&geometry, w, h);
+            let r: Vec<Vec3> = points
                 .par_iter()
                 .map(|&(p, n)| {
                     let (_, d, _) = tracer.ao_and_diffuse(p, n, false, true);
@@ -52,10 +53,10 @@ fn main() {
                 })
                 .collect();
             println!(
-                "frame 320x180: checksum {:016x}",
+                "frame {w}x{h}: checksum {:016x}",
                 checksum(r.iter().flat_map(|v| v.to_array()))
             );
         }
-        other => panic!("unknown work {other:?}: setup, diffuse or frame"),
+        other => panic!("unknown work {other:?}: setup, diffuse, frame or frame1280"),
     }
 }
