@@ -396,17 +396,10 @@ pub fn validate_spheres(spheres: &[DisplacedSphere]) -> Result<()> {
     Ok(())
 }
 
-/// Bins, culls, fills and lights `spheres` in `spec`. `view` (the camera frame of the image to
-/// render) enables culling; without it every occupied metavoxel is kept. `blocker` (the mesh's
-/// BVH, opaque) casts the scene's shadow on the volume.
-pub fn build(
-    spheres: &[DisplacedSphere],
-    map: &DisplacementMap,
-    spec: &VolumeSpec,
-    settings: &BuildSettings,
-    view: Option<&CameraFrame>,
-    blocker: Option<&Bvh>,
-) -> Result<Volume> {
+/// The checks [`build`] makes before any work: every particle ([`validate_spheres`]) and the
+/// light terms of `settings` (finite, ≥ 0). Other backends of the build (voxlod-gpu) call it,
+/// so bad input gets the same errors.
+pub fn validate_build(spheres: &[DisplacedSphere], settings: &BuildSettings) -> Result<()> {
     validate_spheres(spheres)?;
     if !(settings.irradiance.is_finite()
         && settings.irradiance.min_element() >= 0.0
@@ -419,6 +412,38 @@ pub fn build(
             reason: "must be finite and ≥ 0".into(),
         });
     }
+    Ok(())
+}
+
+/// The memory check of [`build`] once culling has chosen `kept` metavoxels: each needs
+/// `16·M³ + 4·M²` bytes; over `settings.max_bytes` is [`Error::OutOfMemory`] with the numbers.
+/// Shared with voxlod-gpu's build (same estimate, same error).
+pub fn check_budget(kept: usize, spec: &VolumeSpec, settings: &BuildSettings) -> Result<()> {
+    let m = spec.metavoxel_edge as u64;
+    let needed = kept as u64 * (m * m * m * 16 + m * m * 4);
+    if needed > settings.max_bytes {
+        let n = spec.voxels_per_axis();
+        return Err(Error::OutOfMemory {
+            dims: [n; 3],
+            estimated_bytes: needed,
+            limit_bytes: settings.max_bytes,
+        });
+    }
+    Ok(())
+}
+
+/// Bins, culls, fills and lights `spheres` in `spec`. `view` (the camera frame of the image to
+/// render) enables culling; without it every occupied metavoxel is kept. `blocker` (the mesh's
+/// BVH, opaque) casts the scene's shadow on the volume.
+pub fn build(
+    spheres: &[DisplacedSphere],
+    map: &DisplacementMap,
+    spec: &VolumeSpec,
+    settings: &BuildSettings,
+    view: Option<&CameraFrame>,
+    blocker: Option<&Bvh>,
+) -> Result<Volume> {
+    validate_build(spheres, settings)?;
     let mut times = StageTimes::default();
     let t = Instant::now();
     let binning = binning::bin(spheres, spec);
@@ -431,16 +456,7 @@ pub fn build(
         None => binning.bins,
     };
     times.culling = t.elapsed();
-    let m = spec.metavoxel_edge as u64;
-    let needed = bins.len() as u64 * (m * m * m * 16 + m * m * 4);
-    if needed > settings.max_bytes {
-        let n = spec.voxels_per_axis();
-        return Err(Error::OutOfMemory {
-            dims: [n; 3],
-            estimated_bytes: needed,
-            limit_bytes: settings.max_bytes,
-        });
-    }
+    check_budget(bins.len(), spec, settings)?;
     let t = Instant::now();
     let prepared = &binning.prepared;
     let mut filled: Vec<(Metavoxel, Option<Vec<Vec3>>)> =

@@ -63,9 +63,9 @@
 //! workgroup reduction first would cut that traffic on a real GPU.
 //!
 //! # Limits and errors
-//! Input is checked as the CPU checks it ([`voxlod_cpu::volume::validate_spheres`], the
-//! irradiance, the `max_bytes` budget, the march's image size, step, camera and depth buffer),
-//! with the very same errors. Buffers over the device's limits are
+//! Input is checked by the CPU's own checks ([`voxlod_cpu::volume::validate_build`]: particles
+//! and light terms; [`voxlod_cpu::volume::check_budget`]: the `max_bytes` budget; the march's
+//! image size, step, camera and depth buffer), so the errors are the very same. Buffers over the device's limits are
 //! [`Error::BufferTooLarge`] with the numbers; over `2³²` voxels or candidates
 //! [`Error::TooLarge`]. A volume lit with [`Attenuation::Exact`] is marched by the reference
 //! march (`march_exact.wgsl`: every voxel crossed with its exact length, the CPU's
@@ -79,7 +79,7 @@ use voxlod_cpu::render::check_image_size;
 use voxlod_cpu::volume::binning::{self, Bin, Binning, Prepared};
 use voxlod_cpu::volume::{
     Attenuation, BuildSettings, BuildStats, LightSpace, MarchOptions, Metavoxel, StageTimes,
-    Volume, VolumeSpec, validate_spheres,
+    Volume, VolumeSpec, check_budget, validate_build,
 };
 use voxlod_scene::camera::CameraFrame;
 use voxlod_scene::particles::{DisplacedSphere, DisplacementMap, FLAG_EMISSIVE};
@@ -940,19 +940,7 @@ impl<'a> VolumeKernels<'a> {
         view: Option<&CameraFrame>,
         blocker: Option<&GpuBvh>,
     ) -> Result<GpuVolume> {
-        validate_spheres(spheres)?;
-        if !(settings.irradiance.is_finite()
-            && settings.irradiance.min_element() >= 0.0
-            && settings.ambient.is_finite()
-            && settings.ambient.min_element() >= 0.0)
-        {
-            return Err(voxlod_cpu::Error::InvalidParameter {
-                name: "irradiance/ambient",
-                value: format!("{} / {}", settings.irradiance, settings.ambient),
-                reason: "must be finite and ≥ 0".into(),
-            }
-            .into());
-        }
+        validate_build(spheres, settings)?;
         let mut times = StageTimes::default();
         let t = Instant::now();
         let binning = self.bin(spheres, spec)?;
@@ -965,17 +953,7 @@ impl<'a> VolumeKernels<'a> {
             None => binning.bins,
         };
         times.culling = t.elapsed();
-        let m = spec.metavoxel_edge as u64;
-        let needed = bins.len() as u64 * (m * m * m * 16 + m * m * 4);
-        if needed > settings.max_bytes {
-            let n = spec.voxels_per_axis();
-            return Err(voxlod_cpu::Error::OutOfMemory {
-                dims: [n; 3],
-                estimated_bytes: needed,
-                limit_bytes: settings.max_bytes,
-            }
-            .into());
-        }
+        check_budget(bins.len(), spec, settings)?;
         let t = Instant::now();
         let mut volume = self.fill(spheres, &binning.prepared, map, spec, &bins)?;
         times.fill = t.elapsed();
@@ -1092,42 +1070,27 @@ mod tests {
         );
         type P = GpuMarchParams;
         let f = offset_of!(P, frame);
-        assert_mirrors(
-            MARCH_WGSL,
-            "Params",
-            size_of::<P>(),
-            &[
-                ("eye", offset_of!(P, eye)),
-                ("forward", offset_of!(P, forward)),
-                ("right", offset_of!(P, right)),
-                ("up", offset_of!(P, up)),
-                ("origin", f),
-                ("u", f + 16),
-                ("v", f + 32),
-                ("w", f + 48),
-                ("eye_voxel", offset_of!(P, eye_voxel)),
-                ("dims", offset_of!(P, dims)),
-                ("mode", offset_of!(P, mode)),
-            ],
-        );
-        assert_mirrors(
-            MARCH_EXACT_WGSL,
-            "Params",
-            size_of::<P>(),
-            &[
-                ("eye", offset_of!(P, eye)),
-                ("forward", offset_of!(P, forward)),
-                ("right", offset_of!(P, right)),
-                ("up", offset_of!(P, up)),
-                ("origin", f),
-                ("u", f + 16),
-                ("v", f + 32),
-                ("w", f + 48),
-                ("eye_voxel", offset_of!(P, eye_voxel)),
-                ("dims", offset_of!(P, dims)),
-                ("mode", offset_of!(P, mode)),
-            ],
-        );
+        // The approximate and the exact march read the same parameters.
+        for wgsl in [MARCH_WGSL, MARCH_EXACT_WGSL] {
+            assert_mirrors(
+                wgsl,
+                "Params",
+                size_of::<P>(),
+                &[
+                    ("eye", offset_of!(P, eye)),
+                    ("forward", offset_of!(P, forward)),
+                    ("right", offset_of!(P, right)),
+                    ("up", offset_of!(P, up)),
+                    ("origin", f),
+                    ("u", f + 16),
+                    ("v", f + 32),
+                    ("w", f + 48),
+                    ("eye_voxel", offset_of!(P, eye_voxel)),
+                    ("dims", offset_of!(P, dims)),
+                    ("mode", offset_of!(P, mode)),
+                ],
+            );
+        }
         assert_mirrors(
             MARCH_WGSL,
             "Entry",
