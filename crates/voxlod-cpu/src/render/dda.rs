@@ -92,9 +92,15 @@ impl Dda {
     pub fn new(grid: &GridSpec, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
         let size = grid.voxel_size as f32;
         let o = ((origin.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
-        let d = dir / size;
-        let dims = grid.dims.as_ivec3();
-        let dims_f = grid.dims.as_vec3a();
+        Self::in_grid_space(grid.dims, o, dir / size, t_min, t_max)
+    }
+
+    /// [`Dda::new`] for a ray already in grid coordinates: origin `o` in voxels from the
+    /// grid's corner, direction `d` = world direction / voxel size (so `t` stays the world
+    /// ray's parameter). A shadow ray starts at a voxel centre `c + ½` exactly this way.
+    pub fn in_grid_space(dims: UVec3, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Self {
+        let dims_f = dims.as_vec3a();
+        let dims = dims.as_ivec3();
         let mut dda = Self {
             origin: o.into(),
             inv: Vec3A::ZERO,

@@ -548,7 +548,8 @@ fn shade_sggx(
 // The transmittance of the shadow ray of voxel c toward the light `lit` seen from its centre.
 fn shadow(c: vec3<i32>, lit: Lit) -> f32 {
     let size = params.grid.w;
-    let o = (centre_of(c) - params.grid.xyz) / size;
+    // From the centre exactly, c + ½ in grid coordinates, as the CPU starts it.
+    let o = vec3<f32>(c) + 0.5;
     var dda = dda_new(o, lit.light.to_light / size, 0.0, lit.distance);
     var t = 1.0;
     for (var h = walk_next(&dda); h.index != NONE; h = walk_next(&dda)) {

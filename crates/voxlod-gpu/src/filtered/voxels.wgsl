@@ -81,7 +81,8 @@ fn light_pass(
 // crossed applying its light-direction opacity from light_pass.
 fn shadow_cached(c: vec3<i32>, lit: Lit) -> f32 {
     let size = params.grid.w;
-    let o = (centre_of(c) - params.grid.xyz) / size;
+    // From the centre exactly, c + ½ in grid coordinates, as the CPU starts it.
+    let o = vec3<f32>(c) + 0.5;
     var dda = dda_new(o, lit.light.to_light / size, 0.0, lit.distance);
     var t = 1.0;
     for (var h = walk_next(&dda); h.index != NONE; h = walk_next(&dda)) {

@@ -7,7 +7,8 @@
 //! every voxel a walk visits before its end is visited with bit-identical `t` values: the
 //! image is the one of unbounded walks.
 
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, UVec3, Vec2, Vec3};
+use rayon::prelude::*;
 use voxlod_format::{BRICK_EDGE, BrickMap, GridSpec, morton};
 use voxlod_scene::camera::CameraFrame;
 
@@ -141,11 +142,11 @@ impl LightBounds {
         let cell = s.max((hi - lo).max_element() / MAX_LIGHT_CELLS as f64 * (1.0 + 1e-9));
         lo -= cell;
         let dims = ((hi + cell - lo) / cell).ceil().as_uvec2().max(glam::UVec2::ONE);
-        let mut top = vec![f32::NEG_INFINITY; (dims.x * dims.y) as usize];
+        let n = (dims.x * dims.y) as usize;
         // A voxel's projected box and top: its centre's, plus half the projected cube.
         let half = |a: DVec3| 0.5 * s * a.abs().element_sum();
         let (h1, h2, hw) = (half(e1), half(e2), half(l));
-        for c in map.coords() {
+        let raise = |top: &mut [f32], c: UVec3| {
             let p = (c.as_dvec3() + 0.5) * s;
             let uv = DVec2::new(p.dot(e1), p.dot(e2));
             let r = DVec2::new(h1, h2) + cell * 1e-3;
@@ -160,7 +161,23 @@ impl LightBounds {
                     *t = t.max(w);
                 }
             }
-        }
+        };
+        // In parallel over a few chunks of voxels, one map each, merged by the (exact,
+        // order-free) maximum: the same heights as one serial pass.
+        let coords: Vec<UVec3> = map.coords().collect();
+        let chunk = coords.len().div_ceil(2 * rayon::current_num_threads()).max(4096);
+        let top = coords
+            .par_chunks(chunk)
+            .map(|voxels| {
+                let mut top = vec![f32::NEG_INFINITY; n];
+                voxels.iter().for_each(|&c| raise(&mut top, c));
+                top
+            })
+            .reduce_with(|mut a, b| {
+                a.iter_mut().zip(b).for_each(|(a, b)| *a = a.max(b));
+                a
+            })
+            .unwrap_or_else(|| vec![f32::NEG_INFINITY; n]);
         let margin = 0.5 * s + 1e-6 * size.length();
         Self { l, e1, e2, lo, cell, dims: [dims.x, dims.y], top, margin }
     }
@@ -224,6 +241,32 @@ mod tests {
         assert!(t > 9.0 / l.y && t < 9.0 / l.y + 4.0, "{t}");
         let t = slanted.t_max(&grid, UVec3::new(20, 1, 20)) / 0.5;
         assert!(t < 3.0, "{t}");
+    }
+
+    #[test]
+    fn light_bounds_do_not_depend_on_the_thread_count() {
+        // 40 k voxels: several chunks of the parallel build.
+        let dims = UVec3::new(48, 40, 44);
+        let voxels = (0..dims.x).flat_map(|x| {
+            (0..dims.z).flat_map(move |z| {
+                let h = (x * 7 + z * 13) % 29;
+                (0..dims.y)
+                    .filter(move |&y| y <= h && (x + y + z) % 3 != 0)
+                    .map(move |y| (UVec3::new(x, y, z), ()))
+            })
+        });
+        let map = BrickMap::from_voxels(dims, voxels).unwrap();
+        assert!(map.len() > 3 * 4096, "{}", map.len());
+        let grid = GridSpec::new(DVec3::new(-1.0, 2.0, 0.5), 0.25, dims).unwrap();
+        let l = Vec3::new(0.3, 0.9, -0.4);
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| LightBounds::new(l, &map, &grid)).top
+        };
+        let one = on(1);
+        assert!(one.iter().filter(|t| t.is_finite()).count() > 1000);
+        assert_eq!(one, on(3));
+        assert_eq!(one, on(8));
     }
 
     #[test]

@@ -81,15 +81,27 @@ impl VoxelLookup {
     /// [`crate::render::dda::DdaVoxel::brick`] reports it), if the voxel has one.
     #[inline(always)]
     pub fn record(&self, brick: u32, voxel: UVec3) -> Option<usize> {
+        self.record_linear(brick, linear(voxel % BRICK_EDGE))
+    }
+
+    /// [`VoxelLookup::record`] of the voxel at linear index `i = x + 8y + 64z` (`i < 512`) in
+    /// brick number `brick`.
+    #[inline(always)]
+    pub fn record_linear(&self, brick: u32, i: u32) -> Option<usize> {
         let (m, r) = (self.masks.get(brick as usize)?, &self.ranks[brick as usize]);
-        let l = voxel % BRICK_EDGE;
-        let word = m.voxels[l.z as usize];
-        let bit = l.x | l.y << 3;
+        let (z, bit) = ((i >> 6) as usize & 7, i & 63);
+        let word = m.voxels[z];
         if word >> bit & 1 == 0 {
             return None;
         }
-        let rank = r.first + r.before[l.z as usize] as u32 + (word & ((1 << bit) - 1)).count_ones();
+        let rank = r.first + r.before[z] as u32 + (word & ((1 << bit) - 1)).count_ones();
         Some(self.records[rank as usize] as usize)
+    }
+
+    /// The occupancy masks of brick number `brick` (an index the brick look-ups return).
+    #[inline(always)]
+    pub fn masks(&self, brick: u32) -> &BrickMasks {
+        &self.masks[brick as usize]
     }
 
     /// Heap bytes held.

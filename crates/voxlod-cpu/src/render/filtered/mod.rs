@@ -18,7 +18,8 @@
 //!   as `T < 0.001` or the ray leaves the grid; the ray's colour is `C + T·background` and its
 //!   alpha (coverage) `1 − T`.
 //! - **Shadows.** A voxel's visibility is the final transmittance of one ray from its centre
-//!   toward the light (up to a point light's distance) through the voxels. The ray ignores the
+//!   (exactly `c + ½` in grid coordinates) toward the light (up to a point light's distance)
+//!   through the voxels. The ray ignores the
 //!   voxels whose centres are closer than 1.5 voxel sizes to the start (the voxel itself and
 //!   its 18 face and edge neighbours, not the 8 corner neighbours at √3), as the baseline
 //!   does. Every other voxel it crosses applies its own opacity for the direction the light
@@ -26,7 +27,11 @@
 //!   at `T < 0.001`. Visibility is cached per voxel and kept across frames while the light
 //!   is unchanged; with `shadows` off every voxel sees the light. A voxel whose radiance
 //!   cannot depend on its visibility ([`Appearance::needs_visibility`]: an Averages voxel
-//!   facing away from the light) traces no shadow ray: the image is the same.
+//!   facing away from the light) traces no shadow ray: the image is the same. All shadow rays
+//!   of a directional light cross the same sequence of cell offsets with the same `t`s, so they
+//!   are walked from one step pattern per light (`shadow.rs`: a brick look-up per brick crossed
+//!   and a mask bit per cell, no plane arithmetic), meeting the voxels a DDA walk meets with
+//!   bit-identical chords (tested).
 //! - **Shading.** The representation's [`Appearance::radiance`] for `v`, the light seen from
 //!   the voxel centre, the visibility and the ambient term; every representation shades with
 //!   the one [`crate::shading::shade`].
@@ -45,6 +50,7 @@
 mod bounds;
 mod cache;
 mod lookup;
+mod shadow;
 
 #[cfg(test)]
 mod tests;
@@ -63,8 +69,9 @@ use super::{check_colour, check_image_size};
 use crate::appearance::{Appearance, Opacity};
 use crate::{Error, Result};
 use bounds::{LightBounds, ScreenTiles};
-use cache::{Slots, ViewKey, light_bounds};
+use cache::{Slots, ViewKey, light_bounds, shadow_pattern};
 use lookup::VoxelLookup;
+use shadow::ShadowPattern;
 
 /// Options of [`render`]. Cost: 4 DDA walks per pixel; per voxel met and frame, one radiance
 /// and one opacity evaluation, plus (cache cold) one shadow walk.
@@ -110,8 +117,9 @@ pub fn render<A: Appearance + ?Sized>(
         ViewKey { eye: camera.eye, light, ambient: options.ambient, shadows: options.shadows };
     cache.prepare(key);
     let cache = &*cache;
-    let bounds = cache.light_bounds.as_ref();
-    Ok(frame(cache, light, background, options, Some(&cache.slots), bounds).render(camera))
+    let shadows =
+        ShadowRays { bounds: cache.light_bounds.as_ref(), pattern: cache.shadow_pattern.as_ref() };
+    Ok(frame(cache, light, background, options, Some(&cache.slots), shadows).render(camera))
 }
 
 /// [`render`] without caching: every camera ray evaluates the radiance, opacity and shadow ray
@@ -126,7 +134,9 @@ pub fn render_uncached<A: Appearance + ?Sized>(
 ) -> Result<Image> {
     let light = validate(cache, camera, light, background, options)?;
     let bounds = light_bounds(&light, &cache.lookup.map, cache.grid());
-    Ok(frame(cache, light, background, options, None, bounds.as_ref()).render(camera))
+    let pattern = shadow_pattern(&light, cache.grid());
+    let shadows = ShadowRays { bounds: bounds.as_ref(), pattern: pattern.as_ref() };
+    Ok(frame(cache, light, background, options, None, shadows).render(camera))
 }
 
 /// Checks the inputs of a frame; returns the validated light.
@@ -170,15 +180,22 @@ pub fn check_frame(
     Ok(light)
 }
 
+/// What a directional light's shadow rays are walked with (both `None` for a point light).
+#[derive(Clone, Copy)]
+struct ShadowRays<'a> {
+    bounds: Option<&'a LightBounds>,
+    pattern: Option<&'a ShadowPattern>,
+}
+
 /// The frame over `cache`'s look-up, caching in `slots` if given, with the shadow-ray bounds
-/// of `light` (if directional).
+/// and step pattern of `light` (if directional).
 fn frame<'c, A: Appearance + ?Sized>(
     cache: &'c FrameCache<'_, A>,
     light: Light,
     background: Vec3,
     options: &'c Options,
     slots: Option<&'c Slots>,
-    light_bounds: Option<&'c LightBounds>,
+    shadows: ShadowRays<'c>,
 ) -> Frame<'c, A> {
     Frame {
         app: cache.appearance(),
@@ -188,7 +205,7 @@ fn frame<'c, A: Appearance + ?Sized>(
         background,
         options,
         slots,
-        light_bounds,
+        shadows,
         inv_size: (1.0 / cache.grid().voxel_size) as f32,
     }
 }
@@ -202,8 +219,8 @@ struct Frame<'a, A: ?Sized> {
     background: Vec3,
     options: &'a Options,
     slots: Option<&'a Slots>,
-    /// Shadow-ray bounds of a directional light (point lights: `None`).
-    light_bounds: Option<&'a LightBounds>,
+    /// Shadow-ray bounds and step pattern of a directional light.
+    shadows: ShadowRays<'a>,
     /// Voxels per world unit: world chords to voxel units.
     inv_size: f32,
 }
@@ -305,24 +322,48 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
         (radiance, self.app.opacity(index, to_eye))
     }
 
-    /// The transmittance of the shadow ray of `voxel` (see the module docs).
+    /// The transmittance of the shadow ray of `voxel` (see the module docs): from the voxel's
+    /// centre `c + ½` in grid coordinates, walked with the light's [`ShadowPattern`] for a
+    /// directional light (the same voxels and chords as a DDA walk, tested), else by a DDA
+    /// walk.
     fn shadow(&self, voxel: UVec3, lookup: &impl BrickLookup) -> f32 {
-        let centre = self.grid.voxel_center(voxel).as_vec3();
-        let light = self.light.sample(centre);
         let mut t = 1.0f32;
-        let t_max = self.light_bounds.map_or(light.distance, |b| b.t_max(self.grid, voxel));
-        let mut walk = Walk::new(self, centre, light.to_light, t_max);
+        // Applies the opacity of voxel `at` (record `index`) over `chord`; false once opaque.
+        let mut cross = |index: usize, at: UVec3, chord: f32| {
+            let opacity = match self.slots {
+                Some(s) => s.light_opacity(index, || self.light_opacity(index, at)),
+                None => self.light_opacity(index, at),
+            };
+            t = opacity.apply(t, chord * self.inv_size);
+            t >= MIN_TRANSMITTANCE
+        };
+        let start = voxel.as_vec3() + 0.5;
+        if let Some(pattern) = self.shadows.pattern {
+            let t_max = self.shadows.bounds.map_or(f32::INFINITY, |b| b.t_max(self.grid, voxel));
+            let lookup_of = &self.lookup;
+            pattern.walk(
+                voxel,
+                self.lookup.map.brick_dims(),
+                t_max,
+                |b| lookup.brick_index(b),
+                |b, i| lookup_of.masks(b).has_voxel_linear(i),
+                |b, i, at, chord| match lookup_of.record_linear(b, i) {
+                    Some(index) => cross(index, at, chord),
+                    None => true,
+                },
+            );
+            return t;
+        }
+        let light = self.light.sample(self.grid.voxel_center(voxel).as_vec3());
+        let t_max = self.shadows.bounds.map_or(light.distance, |b| b.t_max(self.grid, voxel));
+        let d = light.to_light / self.grid.voxel_size as f32;
+        let mut walk = Walk::in_grid_space(self, start, d, t_max);
         while let Some((v, index)) = walk.next(lookup) {
             let offset = v.voxel.as_ivec3() - voxel.as_ivec3();
             if offset.length_squared() <= SHADOW_SKIP_SQ {
                 continue;
             }
-            let opacity = match self.slots {
-                Some(s) => s.light_opacity(index, || self.light_opacity(index, v.voxel)),
-                None => self.light_opacity(index, v.voxel),
-            };
-            t = opacity.apply(t, (v.t_exit - v.t_enter) * self.inv_size);
-            if t < MIN_TRANSMITTANCE {
+            if !cross(index, v.voxel, v.t_exit - v.t_enter) {
                 break;
             }
         }
@@ -348,6 +389,12 @@ impl<'a> Walk<'a> {
     #[inline]
     fn new<A: ?Sized>(frame: &Frame<'a, A>, origin: Vec3, dir: Vec3, t_max: f32) -> Self {
         Self { dda: Dda::new(frame.grid, origin, dir, 0.0, t_max), lookup: frame.lookup }
+    }
+
+    /// A walk of a ray given in grid coordinates ([`Dda::in_grid_space`]).
+    #[inline]
+    fn in_grid_space<A: ?Sized>(frame: &Frame<'a, A>, o: Vec3, d: Vec3, t_max: f32) -> Self {
+        Self { dda: Dda::in_grid_space(frame.grid.dims, o, d, 0.0, t_max), lookup: frame.lookup }
     }
 
     /// The next voxel with a record, and the record's index.

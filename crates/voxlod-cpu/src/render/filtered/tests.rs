@@ -93,16 +93,21 @@ fn colour_of(c: UVec3) -> Vec3 {
     )
 }
 
-/// A frame over `cache` with or without its slots, and with shadow-ray bounds if given.
+/// A frame over `cache` with or without its slots, and with shadow-ray bounds and step
+/// pattern if given.
 fn frame_of<'c>(
     cache: &'c FrameCache<'_, TestApp>,
     light: Light,
     options: &'c Options,
     cached: bool,
-    bounds: Option<&'c LightBounds>,
+    (bounds, pattern): (Option<&'c LightBounds>, Option<&'c ShadowPattern>),
 ) -> Frame<'c, TestApp> {
-    frame(cache, light, Vec3::ZERO, options, cached.then_some(&cache.slots), bounds)
+    let shadows = ShadowRays { bounds, pattern };
+    frame(cache, light, Vec3::ZERO, options, cached.then_some(&cache.slots), shadows)
 }
+
+/// No shadow-ray bounds and no step pattern: every shadow ray walks the DDA unbounded.
+const PLAIN: (Option<&LightBounds>, Option<&ShadowPattern>) = (None, None);
 
 /// A random unit direction and an origin outside the `dims` box aiming through it.
 fn random_ray(i: u32, dims: Vec3) -> (Vec3, Vec3) {
@@ -127,7 +132,7 @@ fn solid_voxels_are_opaque_after_the_first_voxel() {
     let cache = FrameCache::new(&a).unwrap();
     let options = Options { shadows: false, ..Options::default() };
     // Uncached: the rays start at different eyes, which one frame (one cache key) never does.
-    let f = frame_of(&cache, UP_PI(), &options, false, None);
+    let f = frame_of(&cache, UP_PI(), &options, false, PLAIN);
     let lookup = cache.lookup.dense.as_ref().unwrap();
     let mut hits = 0;
     for i in 0..400 {
@@ -171,7 +176,7 @@ fn the_walk_stops_below_a_transmittance_of_one_thousandth() {
         let cache = FrameCache::new(&a).unwrap();
         let options = Options { shadows: false, ..Options::default() };
         for cached in [true, false] {
-            let f = frame_of(&cache, UP_PI(), &options, cached, None);
+            let f = frame_of(&cache, UP_PI(), &options, cached, PLAIN);
             let r = f.trace(
                 Vec3::new(-5.0, 0.5, 0.5),
                 Vec3::X,
@@ -237,7 +242,7 @@ fn vjk21_voxels_with_gamma_one_composite_exponentially() {
     let lookup = cache.lookup.dense.as_ref().unwrap();
     let mut deep = 0;
     for cached in [false, true] {
-        let f = frame_of(&cache, light, &options, cached, None);
+        let f = frame_of(&cache, light, &options, cached, PLAIN);
         // One eye per frame (the cache's key); rays toward random points of the grid.
         let eye = Vec3::new(-13.0, 31.0, 27.0);
         for i in 0..300 {
@@ -267,7 +272,7 @@ fn vjk21_voxels_with_gamma_one_composite_exponentially() {
     let (vjk, alphas) = (column(true), column(false));
     let trace = |a: &TestApp| {
         let cache = FrameCache::new(a).unwrap();
-        let f = frame_of(&cache, light, &options, true, None);
+        let f = frame_of(&cache, light, &options, true, PLAIN);
         f.trace(
             Vec3::new(0.5, 0.5, -3.0),
             Vec3::Z,
@@ -306,7 +311,7 @@ fn brick_skipping_walks_skip_no_voxel() {
     let lookup = cache.lookup.dense.as_ref().unwrap();
     let options = Options { shadows: false, ..Options::default() };
     let light = UP_PI();
-    let f = frame_of(&cache, light, &options, true, None);
+    let f = frame_of(&cache, light, &options, true, PLAIN);
     let eye = Vec3::new(-90.0, 150.0, 260.0);
     let mut hits = 0;
     for i in 0..700 {
@@ -327,17 +332,24 @@ fn brick_skipping_walks_skip_no_voxel() {
     for to_light in [Vec3::new(0.3, 0.2, -0.4), Vec3::new(-0.1, 0.05, 1.0), Vec3::Y] {
         let light = sun(to_light, 1.0);
         let bounds = light_bounds(&light, &cache.lookup.map, cache.grid()).unwrap();
+        let pattern = shadow_pattern(&light, cache.grid()).unwrap();
         let to_light = to_light.normalize();
+        let d = to_light / a.grid.voxel_size as f32;
         for (i, c) in cache.lookup.map.coords().enumerate().step_by(3) {
-            let centre = a.grid.voxel_center(c).as_vec3();
+            let centre = c.as_vec3() + 0.5;
             let mut expected = 1.0f32;
-            for v in Dda::new(&a.grid, centre, to_light, 0.0, f32::INFINITY) {
+            for v in Dda::in_grid_space(a.grid.dims, centre, d, 0.0, f32::INFINITY) {
                 let near = (v.voxel.as_ivec3() - c.as_ivec3()).length_squared() <= 2;
                 if !near && a.index_of(v.voxel).is_some() && expected >= MIN_TRANSMITTANCE {
                     expected *= 0.7;
                 }
             }
-            for b in [None, Some(&bounds)] {
+            for b in [
+                (None, None),
+                (Some(&bounds), None),
+                (None, Some(&pattern)),
+                (Some(&bounds), Some(&pattern)),
+            ] {
                 let g = frame_of(&cache, light, &options, false, b);
                 assert_eq!(g.shadow(c, lookup), expected, "voxel {i} at {c}, {to_light}");
             }
@@ -440,7 +452,7 @@ fn screen_tiles_skip_only_rays_that_meet_nothing() {
     let cache = FrameCache::new(&a).unwrap();
     let options = Options { width: 45, height: 37, ambient: Vec3::ZERO, shadows: false };
     let lookup = cache.lookup.dense.as_ref().unwrap();
-    let f = frame_of(&cache, UP_PI(), &options, false, None);
+    let f = frame_of(&cache, UP_PI(), &options, false, PLAIN);
     let cameras = [
         // Outside, the model small on screen; grazing along the floor; inside the grid (bricks
         // behind the eye plane); looking away from everything.
@@ -494,11 +506,16 @@ fn shadow_rays_ignore_exactly_the_voxel_and_its_18_near_neighbours() {
         let cache = FrameCache::new(&a).unwrap();
         let light = sun(to_light, 1.0);
         let bounds = light_bounds(&light, &cache.lookup.map, cache.grid());
+        let pattern = shadow_pattern(&light, cache.grid());
         let lookup = cache.lookup.dense.as_ref().unwrap();
-        let unbounded = frame_of(&cache, light, &options, false, None).shadow(c, lookup);
-        let bounded = frame_of(&cache, light, &options, false, bounds.as_ref()).shadow(c, lookup);
+        let unbounded = frame_of(&cache, light, &options, false, PLAIN).shadow(c, lookup);
+        let bounded = (bounds.as_ref(), None);
+        let bounded = frame_of(&cache, light, &options, false, bounded).shadow(c, lookup);
+        let patterned = (bounds.as_ref(), pattern.as_ref());
+        let patterned = frame_of(&cache, light, &options, false, patterned).shadow(c, lookup);
         assert_eq!(unbounded, bounded);
-        bounded
+        assert_eq!(unbounded, patterned);
+        patterned
     };
     assert_eq!(visibility(None, Vec3::new(0.3, 1.0, -0.2)), 1.0, "the voxel itself is ignored");
     let mut ignored = 1; // the voxel itself
