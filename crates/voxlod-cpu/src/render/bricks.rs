@@ -20,6 +20,16 @@ pub trait BrickLookup {
     fn brick_index_f(&self, brick: Vec3A) -> Option<u32> {
         self.brick_index(brick.as_uvec3())
     }
+
+    /// Whether the 2³-brick block (16³ voxels, aligned to even brick coordinates) holding
+    /// `brick` — an unallocated brick inside the grid's bricks, held as integer-valued `f32`
+    /// lanes — has no allocated brick at all, so that a walk may cross the whole block in one
+    /// jump. `false` (the default) is always correct: the walk then steps brick by brick.
+    #[inline(always)]
+    fn empty_block_f(&self, brick: Vec3A) -> bool {
+        let _ = brick;
+        false
+    }
 }
 
 /// Which voxels of an allocated 8³ brick are occupied, at two granularities: voxels and the
@@ -98,6 +108,16 @@ impl<L: BrickLookup> BrickLookup for Occupancy<'_, L> {
     fn brick_index(&self, brick: UVec3) -> Option<u32> {
         self.bricks.brick_index(brick)
     }
+
+    #[inline(always)]
+    fn brick_index_f(&self, brick: Vec3A) -> Option<u32> {
+        self.bricks.brick_index_f(brick)
+    }
+
+    #[inline(always)]
+    fn empty_block_f(&self, brick: Vec3A) -> bool {
+        self.bricks.empty_block_f(brick)
+    }
 }
 
 impl<L: BrickLookup> VoxelOccupancy for Occupancy<'_, L> {
@@ -127,7 +147,9 @@ impl<T> BrickLookup for BrickMap<T> {
 
 /// A dense table of brick indices over the grid's brick dimensions, 4 bytes per brick
 /// position (1/128 byte per voxel of the bounding box): a DDA step looks a brick up with one
-/// load. [`DenseBricks::new`] declines grids whose table would exceed
+/// load. Beside it, one byte per 2³-brick block (16³ voxels) saying whether the block has an
+/// allocated brick ([`BrickLookup::empty_block_f`]), so that walks cross empty blocks in one
+/// jump. [`DenseBricks::new`] declines grids whose table would exceed
 /// [`DenseBricks::MAX_ENTRIES`]; use the [`BrickMap`] itself (hashed) there.
 #[derive(Clone, Debug)]
 pub struct DenseBricks {
@@ -135,6 +157,10 @@ pub struct DenseBricks {
     /// `(1, x, x·y)` of `dims`, for [`BrickLookup::brick_index_f`].
     strides: Vec3A,
     index: Vec<u32>,
+    /// `(1, x, x·y)` of the block dimensions `⌈dims / 2⌉`.
+    block_strides: Vec3A,
+    /// Per 2³-brick block: 1 if it holds an allocated brick.
+    blocks: Vec<u8>,
 }
 
 impl DenseBricks {
@@ -150,12 +176,21 @@ impl DenseBricks {
             return None;
         }
         let mut index = vec![u32::MAX; n as usize];
+        let block_dims = (dims + 1) / 2;
+        let mut blocks = vec![0u8; block_dims.as_u64vec3().element_product() as usize];
         for (i, h) in map.bricks().iter().enumerate() {
             let b = morton::decode(h.morton);
             index[Self::offset(dims, b)] = i as u32;
+            blocks[Self::offset(block_dims, b / 2)] = 1;
         }
-        let strides = Vec3A::new(1.0, dims.x as f32, (dims.x * dims.y) as f32);
-        Some(Self { dims, strides, index })
+        let strides = |d: UVec3| Vec3A::new(1.0, d.x as f32, (d.x * d.y) as f32);
+        Some(Self {
+            dims,
+            strides: strides(dims),
+            index,
+            block_strides: strides(block_dims),
+            blocks,
+        })
     }
 
     #[inline(always)]
@@ -165,7 +200,7 @@ impl DenseBricks {
 
     /// Heap bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.index.capacity() * size_of::<u32>()
+        self.index.capacity() * size_of::<u32>() + self.blocks.capacity()
     }
 }
 
@@ -187,6 +222,14 @@ impl BrickLookup for DenseBricks {
         let offset = brick.dot(self.strides) as usize;
         let i = *self.index.get(offset)?;
         (i != u32::MAX).then_some(i)
+    }
+
+    /// One load: the block's offset as a dot product of `⌊brick / 2⌋` (exact in `f32`), as
+    /// for [`BrickLookup::brick_index_f`]; outside the table reads as "not empty".
+    #[inline(always)]
+    fn empty_block_f(&self, brick: Vec3A) -> bool {
+        let offset = (brick * 0.5).floor().dot(self.block_strides) as usize;
+        self.blocks.get(offset) == Some(&0)
     }
 }
 
@@ -217,7 +260,8 @@ mod tests {
             .collect();
         let map = BrickMap::from_voxels(dims, voxels.iter().copied()).unwrap();
         let dense = DenseBricks::new(&map).unwrap();
-        assert_eq!(dense.memory_bytes(), 5 * 2 * 3 * 4);
+        // 5 × 2 × 3 bricks of 4 bytes, 3 × 1 × 2 blocks of one byte.
+        assert_eq!(dense.memory_bytes(), 5 * 2 * 3 * 4 + 3 * 2);
         for x in 0..6 {
             for y in 0..3 {
                 for z in 0..4 {
@@ -226,6 +270,13 @@ mod tests {
                     if b.cmplt((dims + 7) / 8).all() {
                         let got = dense.brick_index_f(b.as_vec3a());
                         assert_eq!(got, dense.brick_index(b), "{b}");
+                        // The block's 8 bricks (those outside the grid have none).
+                        let empty = (0..8).all(|k| {
+                            let n = b / 2 * 2 + UVec3::new(k & 1, k >> 1 & 1, k >> 2);
+                            dense.brick_index(n).is_none()
+                        });
+                        assert_eq!(dense.empty_block_f(b.as_vec3a()), empty, "{b}");
+                        assert!(!BrickLookup::empty_block_f(&map, b.as_vec3a()), "the default");
                     }
                 }
             }

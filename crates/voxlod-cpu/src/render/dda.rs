@@ -1,7 +1,12 @@
 //! A 3D DDA (Amanatides & Woo 1987) that walks a ray through the voxels of a [`GridSpec`] in
-//! order, with each voxel's entry and exit `t`, and jumps over empty 8³ bricks in one step.
+//! order, with each voxel's entry and exit `t`, and jumps over empty 8³ bricks in one step
+//! (and over empty 2³-brick blocks, where the look-up knows them: [`DenseBricks`]).
 //! Every voxel renderer and voxel shadow ray walks with it; its state is a few registers and
-//! its loop has no recursion, so the WGSL mirror is the same code.
+//! its loop has no recursion, so the WGSL mirror is the same code (the WGSL walks step brick
+//! by brick; the block jumps reach the same voxels with the same `t`s, so they are a CPU-only
+//! shortcut).
+//!
+//! [`DenseBricks`]: super::bricks::DenseBricks
 //!
 //! # Conventions and tie rules
 //! - `t` is the parameter of the world-space ray `origin + t·dir` (a distance for a unit `dir`).
@@ -400,14 +405,28 @@ impl Dda {
     /// allocated one and enters it: its voxel where the ray enters it, located by the plane
     /// expression of the voxel stepping, so the result is what stepping voxel by voxel would
     /// reach. Returns false (and ends the walk) if the ray leaves the grid or ends first.
+    ///
+    /// Where the look-up says the 2³-brick block around an empty brick is empty
+    /// ([`BrickLookup::empty_block_f`]), the whole block is crossed in one jump, as
+    /// [`Dda::skip_block`] crosses an empty 2³-voxel block: its exit plane by the one
+    /// expression, and on the other axes the half of the block the ray is in at that `t` (past
+    /// the block's middle plane iff it crosses it at or before then) — the brick that stepping
+    /// brick by brick reaches.
     fn skip_empty_bricks(&mut self, mut b: Vec3A, lookup: &impl BrickLookup) -> bool {
         let edge = BRICK_EDGE as f32;
         loop {
-            let lo = b * edge;
-            let hi = (lo + edge).min(self.dims) - 1.0;
-            let exit_cell = Vec3A::select(self.up, hi, lo);
-            let (t_exit, axes) = self.next_crossing(exit_cell);
-            b += Vec3A::select(axes, self.step, Vec3A::ZERO);
+            let (t_exit, axes) = if lookup.empty_block_f(b) {
+                let (t_exit, axes, next) = self.block_exit(b);
+                b = next;
+                (t_exit, axes)
+            } else {
+                let lo = b * edge;
+                let hi = (lo + edge).min(self.dims) - 1.0;
+                let exit_cell = Vec3A::select(self.up, hi, lo);
+                let (t_exit, axes) = self.next_crossing(exit_cell);
+                b += Vec3A::select(axes, self.step, Vec3A::ZERO);
+                (t_exit, axes)
+            };
             if t_exit >= self.t_end || (b.cmplt(Vec3A::ZERO) | b.cmpge(self.brick_dims)).any() {
                 self.done = true;
                 return false;
@@ -420,6 +439,32 @@ impl Dda {
             self.cached_index = index;
             return true;
         }
+    }
+
+    /// Where the ray leaves the 2³-brick block holding brick `b` (which it is in): the `t`, the
+    /// axes whose planes it crosses there, and the brick it enters then — on the axes crossed,
+    /// the brick past the block; on the others, the block's near or far half by its middle
+    /// plane (see [`Dda::skip_empty_bricks`]). A block cut by the grid's end has one brick on that axis,
+    /// and the rule gives that brick: going down the ray is past the middle plane already,
+    /// going up it leaves the grid before reaching it.
+    #[inline]
+    fn block_exit(&self, b: Vec3A) -> (f32, BVec3A, Vec3A) {
+        let edge = BRICK_EDGE as f32;
+        let first = (b * 0.5).floor() * 2.0;
+        let last = (first + 1.0).min(self.brick_dims - 1.0);
+        let exit_brick = Vec3A::select(self.up, last, first);
+        let lo = exit_brick * edge;
+        let hi = (lo + edge).min(self.dims) - 1.0;
+        let (t_exit, axes) = self.next_crossing(Vec3A::select(self.up, hi, lo));
+        let mid = Vec3A::select(
+            self.parallel,
+            Vec3A::INFINITY,
+            ((first + 1.0) * edge - self.origin) * self.inv,
+        );
+        let near = Vec3A::select(self.up, first, first + 1.0);
+        let inside = near + Vec3A::select(mid.cmple(Vec3A::splat(t_exit)), self.step, Vec3A::ZERO);
+        let stay = Vec3A::select(self.parallel, b, inside);
+        (t_exit, axes, Vec3A::select(axes, exit_brick + self.step, stay))
     }
 }
 

@@ -188,6 +188,78 @@ proptest! {
     }
 }
 
+/// A coordinate of a larger grid: often on a brick or 2³-brick block boundary (multiples of 8
+/// and 16, where block jumps tie with brick and voxel planes), else random.
+fn block_coordinate() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        2 => -5.0f32..110.0,
+        1 => (-1i32..8).prop_map(|i| (i * 16) as f32),
+        1 => (-1i32..14).prop_map(|i| (i * 8) as f32),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Grids up to 13 bricks (7 blocks of 2³ bricks) per axis with a few clumps of voxels, so
+    /// that walks cross empty blocks in one jump, through partial blocks at the grid's end and
+    /// through block corners and edges: the same voxels, `t`s and normals as plain stepping.
+    #[test]
+    fn empty_block_jumps_equal_stepping(
+        dims in (1u32..100, 1u32..100, 1u32..100),
+        clumps in proptest::collection::vec((0u32..100, 0u32..100, 0u32..100), 1..6),
+        o in (block_coordinate(), block_coordinate(), block_coordinate()),
+        jitter in (-3i32..4, -3i32..4, -3i32..4),
+        parallel in (0u32..8, 0u32..8, 0u32..8),
+        t_max in prop_oneof![3 => Just(f32::INFINITY), 1 => 0.0f32..200.0],
+    ) {
+        let dims = UVec3::new(dims.0, dims.1, dims.2);
+        // Aimed at the first clump (an integer offset: exact ties at brick and block corners
+        // when the origin is on a boundary), each axis sometimes parallel.
+        let clump = UVec3::new(clumps[0].0, clumps[0].1, clumps[0].2) % dims;
+        let target = clump.as_ivec3() + IVec3::new(jitter.0, jitter.1, jitter.2);
+        let mut d = target.as_vec3() + 0.5 * (parallel.0 % 2) as f32 - Vec3::new(o.0, o.1, o.2);
+        for (a, p) in [parallel.0, parallel.1, parallel.2].into_iter().enumerate() {
+            if p == 0 {
+                d[a] = 0.0;
+            }
+        }
+        let d = (d.x, d.y, d.z);
+        // Each clump: a 3³ cube of voxels, clipped to the grid.
+        let occupied: std::collections::HashSet<UVec3> = clumps
+            .iter()
+            .flat_map(|&(x, y, z)| {
+                let c = UVec3::new(x, y, z) % dims;
+                (0..27u32).map(move |k| c + UVec3::new(k % 3, k / 3 % 3, k / 9))
+            })
+            .filter(|c| c.cmplt(dims).all())
+            .collect();
+        let map = BrickMap::from_voxels(dims, occupied.iter().map(|&c| (c, ()))).unwrap();
+        let grid = unit_grid(dims);
+        let (o, d) = (Vec3::new(o.0, o.1, o.2), Vec3::new(d.0, d.1, d.2));
+        let table = DenseBricks::new(&map).unwrap();
+        let masks = brick_masks(&map);
+        let by_brick: Vec<DdaVoxel> = Dda::new(&grid, o, d, 0.0, t_max)
+            .filter(|v| map.brick_index(v.voxel / 8).is_some())
+            .collect();
+        let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
+        let mut got = Vec::new();
+        while let Some(v) = dda.next_occupied_brick(&table) {
+            prop_assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap());
+            got.push(DdaVoxel { brick: u32::MAX, ..v });
+        }
+        prop_assert_eq!(&got, &by_brick);
+        let by_voxel: Vec<DdaVoxel> =
+            by_brick.iter().copied().filter(|v| occupied.contains(&v.voxel)).collect();
+        let occupancy = Occupancy { bricks: &table, masks: &masks };
+        let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
+        let mut got = Vec::new();
+        while let Some(v) = dda.next_occupied_voxel(&occupancy) {
+            got.push(DdaVoxel { brick: u32::MAX, ..v });
+        }
+        prop_assert_eq!(&got, &by_voxel);
+    }
+}
+
 #[test]
 fn brick_masks_mark_voxels_and_their_blocks() {
     let voxels =
@@ -295,6 +367,31 @@ fn a_skipped_block_is_left_through_an_edge_as_stepping_leaves_it() {
     assert_eq!(expected[0].entry_normal, IVec3::new(0, -1, 0));
     let masks = brick_masks(&map);
     let table = DenseBricks::new(&map).unwrap();
+    let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
+    let mut got = Vec::new();
+    while let Some(v) = dda.next_occupied_voxel(&Occupancy { bricks: &table, masks: &masks }) {
+        got.push(DdaVoxel { brick: u32::MAX, ..v });
+    }
+    assert_eq!(got, expected);
+}
+
+#[test]
+fn an_empty_brick_block_is_left_through_an_edge_as_stepping_leaves_it() {
+    // From (12, 0, 4.5) along (1, 2, 0) the ray leaves the empty 2³-brick block [0, 16)²
+    // through x = 16 at t = 4, exactly where it crosses the block's middle plane y = 8:
+    // stepping moves both axes at once, into brick (2, 1, 0) and its voxel (16, 8, 4),
+    // entered through −y (the larger direction component).
+    let dims = UVec3::new(48, 48, 16);
+    let voxels = [UVec3::new(16, 8, 4), UVec3::new(17, 10, 4), UVec3::new(40, 40, 4)];
+    let map = BrickMap::from_voxels(dims, voxels.iter().map(|&c| (c, ()))).unwrap();
+    let (grid, o, d) = (unit_grid(dims), Vec3::new(12.0, 0.0, 4.5), Vec3::new(1.0, 2.0, 0.0));
+    let expected: Vec<DdaVoxel> =
+        Dda::new(&grid, o, d, 0.0, f32::INFINITY).filter(|v| voxels.contains(&v.voxel)).collect();
+    assert_eq!(expected[0].voxel, UVec3::new(16, 8, 4));
+    assert_eq!((expected[0].t_enter, expected[0].entry_normal), (4.0, IVec3::new(0, -1, 0)));
+    let masks = brick_masks(&map);
+    let table = DenseBricks::new(&map).unwrap();
+    assert!(table.empty_block_f(Vec3A::new(1.0, 0.0, 0.0)), "the walk starts in an empty block");
     let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
     let mut got = Vec::new();
     while let Some(v) = dda.next_occupied_voxel(&Occupancy { bricks: &table, masks: &masks }) {
