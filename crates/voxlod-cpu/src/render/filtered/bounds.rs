@@ -163,9 +163,8 @@ impl LightBounds {
         // centre: one addition per coordinate and voxel instead of a Morton decode and three
         // dot products.
         let project = |p: DVec3| DVec3::new(p.dot(e1), p.dot(e2), p.dot(l));
-        let local: Vec<DVec3> = (0..512u64)
-            .map(|i| project((morton::decode(i).as_dvec3() + 0.5) * s))
-            .collect();
+        let local: Vec<DVec3> =
+            (0..512u64).map(|i| project((morton::decode(i).as_dvec3() + 0.5) * s)).collect();
         for h in map.bricks() {
             let corner = project((morton::decode(h.morton) * BRICK_EDGE).as_dvec3() * s);
             for (w, &word) in h.mask.iter().enumerate() {
