@@ -220,8 +220,9 @@ pub(super) fn shadow_pattern(light: &Light, grid: &GridSpec) -> Option<ShadowPat
 ///
 /// Memory: 24 B (view) + 4 B (shadow) + 12 B (light opacity) + 4 B (look-up) per voxel with a
 /// record, about 170 B per allocated brick (headers and linear masks), the dense brick table
-/// (4 B per brick of the grid) and, for a directional light, the shadow-ray height map and
-/// step pattern (about 5 KB per voxel of the grid's longest edge: 1.4 MB at 256³).
+/// (4 B per brick of the grid, 1 B per 2³ bricks) and, for a directional light, the
+/// shadow-ray height map and step pattern (about 5 KB per voxel of the grid's longest edge:
+/// 1.4 MB at 256³).
 pub struct FrameCache<'a, A: ?Sized> {
     app: &'a A,
     grid: GridSpec,
