@@ -176,14 +176,55 @@ struct Group {
     chord: f64,
 }
 
+/// The sums the profiled loss is made of, accumulated group by group in order.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    saa: f64,
+    sab: f64,
+    sbb: f64,
+    sma: f64,
+    smb: f64,
+    m: f64,
+}
+
+impl Sums {
+    /// Adds group `g` with `f = a + γ·b` at its chord ([`affine_parts`]).
+    #[inline(always)]
+    fn add(&mut self, g: &Group, (a, b): (f64, f64)) {
+        self.saa += g.count * a * a;
+        self.sab += g.count * a * b;
+        self.sbb += g.count * b * b;
+        self.sma += g.visible * a;
+        self.smb += g.visible * b;
+        self.m += g.visible;
+    }
+
+    /// The byte γ that minimizes the loss at σ code `code`, and the loss there.
+    fn optimum(&self, code: u8) -> (u8, f64) {
+        let Sums { saa, sab, sbb, sma, smb, m } = *self;
+        let gamma_byte = if sbb > 0.0 {
+            let g = ((smb - sab) / sbb).clamp(0.0, 1.0);
+            (g * 255.0).round() as u8
+        } else if code == 0 {
+            255
+        } else {
+            0
+        };
+        let g = from_unorm8(gamma_byte) as f64;
+        let loss = saa + 2.0 * g * sab + g * g * sbb - 2.0 * sma - 2.0 * g * smb + m;
+        (gamma_byte, loss.max(0.0))
+    }
+}
+
 /// The profiled loss at σ code `code`: the byte γ that minimizes it and the loss there, from
 /// one pass of sums: with `n` lines and `m` visible per group, `L(γ) = Σn a² + 2γ Σn ab +
-/// γ² Σn b² − 2Σm a − 2γ Σm b + Σm`.
+/// γ² Σn b² − 2Σm a − 2γ Σm b + Σm`. The exponentials are taken in batches
+/// ([`exp_neg_batch`]); the sums are those of [`affine_parts`] group by group, bit for bit.
 fn profile(groups: &[Group], code: u8) -> (u8, f64) {
     /// Groups whose exponentials are taken in one batch.
     const BATCH: usize = 64;
     let sigma = SIGMA_RANGE.decode(code) as f64;
-    let (mut saa, mut sab, mut sbb, mut sma, mut smb, mut m) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut sums = Sums::default();
     let (mut tau, mut e) = ([0.0; BATCH], [0.0; BATCH]);
     for chunk in groups.chunks(BATCH) {
         let (tau, e) = (&mut tau[..chunk.len()], &mut e[..chunk.len()]);
@@ -191,29 +232,13 @@ fn profile(groups: &[Group], code: u8) -> (u8, f64) {
             *t = sigma * g.chord;
         }
         exp_neg_batch(tau, e);
-        // The sums in group order, as [`affine_parts`] would give them.
         for ((g, &t), &e) in chunk.iter().zip(tau.iter()).zip(e.iter()) {
+            // `affine_parts(t)`, with its exponential from the batch.
             let a = (1.0 - 0.5 * t).max(0.0);
-            let b = e - a;
-            saa += g.count * a * a;
-            sab += g.count * a * b;
-            sbb += g.count * b * b;
-            sma += g.visible * a;
-            smb += g.visible * b;
-            m += g.visible;
+            sums.add(g, (a, e - a));
         }
     }
-    let gamma_byte = if sbb > 0.0 {
-        let g = ((smb - sab) / sbb).clamp(0.0, 1.0);
-        (g * 255.0).round() as u8
-    } else if code == 0 {
-        255
-    } else {
-        0
-    };
-    let g = from_unorm8(gamma_byte) as f64;
-    let loss = saa + 2.0 * g * sab + g * g * sbb - 2.0 * sma - 2.0 * g * smb + m;
-    (gamma_byte, loss.max(0.0))
+    sums.optimum(code)
 }
 
 fn raw_groups(rays: &[RaySample]) -> Vec<Group> {
@@ -471,26 +496,16 @@ mod tests {
                 .collect();
             for code in 0..=255u8 {
                 let sigma = SIGMA_RANGE.decode(code) as f64;
-                // The sums one group at a time, as before batching.
-                let (mut saa, mut sab, mut sbb, mut sma, mut smb, mut m) =
-                    (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-                for g in &groups {
-                    let (a, b) = affine_parts(sigma * g.chord);
-                    saa += g.count * a * a;
-                    sab += g.count * a * b;
-                    sbb += g.count * b * b;
-                    sma += g.visible * a;
-                    smb += g.visible * b;
-                    m += g.visible;
-                }
-                let (gamma_byte, loss) = profile(&groups, code);
-                let g = from_unorm8(gamma_byte) as f64;
-                let want = saa + 2.0 * g * sab + g * g * sbb - 2.0 * sma - 2.0 * g * smb + m;
-                assert_eq!(loss.to_bits(), want.max(0.0).to_bits(), "{n} groups, code {code}");
-                if sbb > 0.0 {
-                    let want_g = ((smb - sab) / sbb).clamp(0.0, 1.0);
-                    assert_eq!(gamma_byte, (want_g * 255.0).round() as u8, "{n}, {code}");
-                }
+                // One group at a time with `affine_parts`, as before batching.
+                let mut sums = Sums::default();
+                groups.iter().for_each(|g| sums.add(g, affine_parts(sigma * g.chord)));
+                let (want_gamma, want_loss) = sums.optimum(code);
+                let (gamma, loss) = profile(&groups, code);
+                assert_eq!(
+                    (gamma, loss.to_bits()),
+                    (want_gamma, want_loss.to_bits()),
+                    "{n}, {code}"
+                );
             }
         }
     }

@@ -82,6 +82,17 @@ fn walk(grid: &GridSpec, o: Vec3, d: Vec3) -> Vec<UVec3> {
     Dda::new(grid, o, d, 0.0, f32::INFINITY).map(|v| v.voxel).collect()
 }
 
+/// The voxels of a walk, one `step()` at a time until it returns `None`, each checked to lie in
+/// the brick its index names in `map`, then with the index cleared (plain stepping has none).
+fn collect_walk(map: &BrickMap<()>, mut step: impl FnMut() -> Option<DdaVoxel>) -> Vec<DdaVoxel> {
+    let mut got = Vec::new();
+    while let Some(v) = step() {
+        assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap(), "{v:?}");
+        got.push(DdaVoxel { brick: u32::MAX, ..v });
+    }
+    got
+}
+
 /// A direction component: often exactly 0, ±1 or a denormal, else random.
 fn component() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -143,12 +154,9 @@ proptest! {
         for dense in [false, true] {
             let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
             let table = DenseBricks::new(&map).unwrap();
-            let mut got = Vec::new();
-            while let Some(v) = if dense { dda.next_occupied_brick(&table) }
-                else { dda.next_occupied_brick(&map) } {
-                prop_assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap());
-                got.push(DdaVoxel { brick: u32::MAX, ..v });
-            }
+            let got = collect_walk(&map, || {
+                if dense { dda.next_occupied_brick(&table) } else { dda.next_occupied_brick(&map) }
+            });
             prop_assert_eq!(&got, &expected);
         }
     }
@@ -179,11 +187,7 @@ proptest! {
         let table = DenseBricks::new(&map).unwrap();
         let occupancy = Occupancy { bricks: &table, masks: &masks };
         let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
-        let mut got = Vec::new();
-        while let Some(v) = dda.next_occupied_voxel(&occupancy) {
-            prop_assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap());
-            got.push(DdaVoxel { brick: u32::MAX, ..v });
-        }
+        let got = collect_walk(&map, || dda.next_occupied_voxel(&occupancy));
         prop_assert_eq!(&got, &expected);
     }
 }
@@ -242,20 +246,13 @@ proptest! {
             .filter(|v| map.brick_index(v.voxel / 8).is_some())
             .collect();
         let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
-        let mut got = Vec::new();
-        while let Some(v) = dda.next_occupied_brick(&table) {
-            prop_assert_eq!(v.brick as usize, map.brick_index(v.voxel / 8).unwrap());
-            got.push(DdaVoxel { brick: u32::MAX, ..v });
-        }
+        let got = collect_walk(&map, || dda.next_occupied_brick(&table));
         prop_assert_eq!(&got, &by_brick);
         let by_voxel: Vec<DdaVoxel> =
             by_brick.iter().copied().filter(|v| occupied.contains(&v.voxel)).collect();
         let occupancy = Occupancy { bricks: &table, masks: &masks };
         let mut dda = Dda::new(&grid, o, d, 0.0, t_max);
-        let mut got = Vec::new();
-        while let Some(v) = dda.next_occupied_voxel(&occupancy) {
-            got.push(DdaVoxel { brick: u32::MAX, ..v });
-        }
+        let got = collect_walk(&map, || dda.next_occupied_voxel(&occupancy));
         prop_assert_eq!(&got, &by_voxel);
     }
 }
@@ -368,11 +365,8 @@ fn a_skipped_block_is_left_through_an_edge_as_stepping_leaves_it() {
     let masks = brick_masks(&map);
     let table = DenseBricks::new(&map).unwrap();
     let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
-    let mut got = Vec::new();
-    while let Some(v) = dda.next_occupied_voxel(&Occupancy { bricks: &table, masks: &masks }) {
-        got.push(DdaVoxel { brick: u32::MAX, ..v });
-    }
-    assert_eq!(got, expected);
+    let occupancy = Occupancy { bricks: &table, masks: &masks };
+    assert_eq!(collect_walk(&map, || dda.next_occupied_voxel(&occupancy)), expected);
 }
 
 #[test]
@@ -393,9 +387,6 @@ fn an_empty_brick_block_is_left_through_an_edge_as_stepping_leaves_it() {
     let table = DenseBricks::new(&map).unwrap();
     assert!(table.empty_block_f(Vec3A::new(1.0, 0.0, 0.0)), "the walk starts in an empty block");
     let mut dda = Dda::new(&grid, o, d, 0.0, f32::INFINITY);
-    let mut got = Vec::new();
-    while let Some(v) = dda.next_occupied_voxel(&Occupancy { bricks: &table, masks: &masks }) {
-        got.push(DdaVoxel { brick: u32::MAX, ..v });
-    }
-    assert_eq!(got, expected);
+    let occupancy = Occupancy { bricks: &table, masks: &masks };
+    assert_eq!(collect_walk(&map, || dda.next_occupied_voxel(&occupancy)), expected);
 }
