@@ -5,8 +5,10 @@
 //! occupied), with which [`Dda::next_occupied_voxel`](super::dda::Dda::next_occupied_voxel)
 //! visits only occupied voxels.
 
-use glam::{UVec3, Vec3A};
+use glam::{IVec3, UVec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, BrickMap, morton};
+
+use super::lanes::{trunc_index, trunc_ivec3};
 
 /// Which 8³ bricks of a grid are allocated.
 pub trait BrickLookup {
@@ -158,7 +160,7 @@ pub struct DenseBricks {
     strides: Vec3A,
     index: Vec<u32>,
     /// `(1, x, x·y)` of the block dimensions `⌈dims / 2⌉`.
-    block_strides: Vec3A,
+    block_strides: IVec3,
     /// Per 2³-brick block: 1 if it holds an allocated brick.
     blocks: Vec<u8>,
 }
@@ -183,12 +185,11 @@ impl DenseBricks {
             index[Self::offset(dims, b)] = i as u32;
             blocks[Self::offset(block_dims, b / 2)] = 1;
         }
-        let strides = |d: UVec3| Vec3A::new(1.0, d.x as f32, (d.x * d.y) as f32);
         Some(Self {
             dims,
-            strides: strides(dims),
+            strides: Vec3A::new(1.0, dims.x as f32, (dims.x * dims.y) as f32),
             index,
-            block_strides: strides(block_dims),
+            block_strides: IVec3::new(1, block_dims.x as i32, (block_dims.x * block_dims.y) as i32),
             blocks,
         })
     }
@@ -219,17 +220,17 @@ impl BrickLookup for DenseBricks {
     /// caller promised against) still reads inside it or gets `None`, never out of bounds.
     #[inline(always)]
     fn brick_index_f(&self, brick: Vec3A) -> Option<u32> {
-        let offset = brick.dot(self.strides) as usize;
+        let offset = trunc_index(brick.dot(self.strides));
         let i = *self.index.get(offset)?;
         (i != u32::MAX).then_some(i)
     }
 
-    /// One load: the block's offset as a dot product of `⌊brick / 2⌋` (exact in `f32`), as
-    /// for [`BrickLookup::brick_index_f`]; outside the table reads as "not empty".
+    /// One load: the block `⌊brick / 2⌋` (a truncation: bricks inside the grid are
+    /// non-negative) and its offset in integers; outside the table reads as "not empty".
     #[inline(always)]
     fn empty_block_f(&self, brick: Vec3A) -> bool {
-        let offset = (brick * 0.5).floor().dot(self.block_strides) as usize;
-        self.blocks.get(offset) == Some(&0)
+        let offset = trunc_ivec3(brick * 0.5).dot(self.block_strides);
+        usize::try_from(offset).ok().and_then(|o| self.blocks.get(o)) == Some(&0)
     }
 }
 

@@ -31,6 +31,7 @@ use glam::{BVec3A, IVec3, UVec3, Vec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, GridSpec};
 
 use super::bricks::{BrickLookup, VoxelOccupancy};
+use super::lanes::{trunc_index, trunc_ivec3, trunc_uvec3};
 
 /// One voxel along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -174,7 +175,7 @@ impl Dda {
         dda.t_base = start;
         dda.t = t0 - start;
         dda.t_end = t1 - start;
-        dda.cell = dda.locate(dda.t, IVec3::ZERO, dims - 1).as_vec3a();
+        dda.cell = dda.locate(dda.t, Vec3A::ZERO, dims_f - 1.0);
         dda.entry_axes = entry_axis.map_or(0, |a| 1 << a);
         dda.done = false;
         dda
@@ -196,13 +197,35 @@ impl Dda {
         }
     }
 
-    /// The voxel holding the ray at `t`, searched in the box `[lo, hi]`: per axis, the cell
-    /// entered at or before `t` and left after it, by the plane expression of the stepping.
-    fn locate(&self, t: f32, lo: IVec3, hi: IVec3) -> IVec3 {
+    /// The voxel holding the ray at `t`, searched in the box `[lo, hi]` (integer-valued
+    /// lanes): per axis, the cell entered at or before `t` and left after it, by the plane
+    /// expression of the stepping.
+    #[inline]
+    fn locate(&self, t: f32, lo: Vec3A, hi: Vec3A) -> Vec3A {
         // Truncation instead of `floor` (a libm call without SSE4.1): they differ only below
         // 0, where the clamp to `lo ≥ 0` makes them agree.
         let p = self.origin + self.dir * t;
-        let mut c = p.as_ivec3().clamp(lo, hi);
+        let c = trunc_ivec3(p).as_vec3a().clamp(lo, hi);
+        // The float estimate is nearly always right: the fix-ups' two tests on all three axes
+        // at once (lane by lane the plane expressions of the loops below), and only where one
+        // of them fails the loops.
+        let exit = (c + self.ahead - self.origin) * self.inv;
+        let entry = (c + (Vec3A::ONE - self.ahead) - self.origin) * self.inv;
+        let t = Vec3A::splat(t);
+        let (near_end, far_end) = (Vec3A::select(self.up, lo, hi), Vec3A::select(self.up, hi, lo));
+        let forward = c.cmpne(far_end) & exit.cmple(t);
+        let back = c.cmpne(near_end) & entry.cmpgt(t);
+        if ((forward | back) & !self.parallel).any() {
+            self.locate_stepping(t.x, trunc_ivec3(c), trunc_ivec3(lo), trunc_ivec3(hi))
+        } else {
+            c
+        }
+    }
+
+    /// The fix-ups of [`Dda::locate`] from the estimate `c`: at most a step or two per axis,
+    /// bounded by the box.
+    #[cold]
+    fn locate_stepping(&self, t: f32, mut c: IVec3, lo: IVec3, hi: IVec3) -> Vec3A {
         for a in 0..3 {
             let s = self.step_i[a];
             if s == 0 {
@@ -211,7 +234,6 @@ impl Dda {
             // The planes a cell is entered and left through, and the search bounds.
             let enter = |c: i32| if s > 0 { c } else { c + 1 };
             let (near_end, far_end) = if s > 0 { (lo[a], hi[a]) } else { (hi[a], lo[a]) };
-            // Fix-ups of the float estimate: at most a step or two, bounded by the box.
             while c[a] != far_end && self.next_t(a, c[a]) <= t {
                 c[a] += s;
             }
@@ -219,7 +241,7 @@ impl Dda {
                 c[a] -= s;
             }
         }
-        c
+        c.as_vec3a()
     }
 
     /// The earliest plane crossing after `cell`: its `t` and the axes that cross there.
@@ -272,7 +294,7 @@ impl Dda {
     fn emit_and_advance(&mut self, brick: u32) -> DdaVoxel {
         let (t_next, axes) = self.next_crossing(self.cell);
         let v = DdaVoxel {
-            voxel: self.cell.as_uvec3(),
+            voxel: trunc_uvec3(self.cell),
             t_enter: self.t_base + self.t,
             t_exit: self.t_base + t_next.min(self.t_end),
             entry_normal: self.normal_for(self.entry_axes),
@@ -341,7 +363,7 @@ impl Dda {
             let masks = occupancy.masks(self.cached_index);
             // Linear index x + 8y + 64z of the cell in its brick: one conversion.
             let local = self.cell - self.cached_brick * BRICK_EDGE as f32;
-            let linear = local.dot(Vec3A::new(1.0, 8.0, 64.0)) as u32;
+            let linear = trunc_index(local.dot(Vec3A::new(1.0, 8.0, 64.0))) as u32;
             if masks.has_voxel_linear(linear) {
                 return Some(self.emit_and_advance(self.cached_index));
             }
@@ -387,17 +409,13 @@ impl Dda {
     /// entry axes every axis whose plane is crossed at exactly `t`, as stepping voxel by voxel
     /// would step them.
     fn enter_at(&mut self, t: f32, axes: u32, lo: Vec3A, hi: Vec3A) {
-        let cell = self.locate(t, lo.as_ivec3(), hi.as_ivec3());
-        let mut entered = axes;
-        for a in 0..3 {
-            let s = self.step_i[a];
-            let enter = if s > 0 { cell[a] } else { cell[a] + 1 };
-            if s != 0 && self.plane(a, enter) == t {
-                entered |= 1 << a;
-            }
-        }
-        self.cell = cell.as_vec3a();
-        self.entry_axes = entered;
+        let cell = self.locate(t, lo, hi);
+        // The entry plane of each axis (`cell` going up, `cell + 1` going down), lane by lane
+        // the expression of `plane`.
+        let entry = (cell + (Vec3A::ONE - self.ahead) - self.origin) * self.inv;
+        let crossed = entry.cmpeq(Vec3A::splat(t)) & !self.parallel;
+        self.cell = cell;
+        self.entry_axes = axes | crossed.bitmask();
         self.t = t;
     }
 

@@ -20,6 +20,7 @@ pub mod dda;
 pub mod filtered;
 pub mod ground_truth;
 pub mod indirect;
+pub(crate) mod lanes;
 pub mod sampling;
 pub(crate) mod surface;
 
