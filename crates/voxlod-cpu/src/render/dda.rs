@@ -106,7 +106,6 @@ impl Dda {
     /// ray's parameter). A shadow ray starts at a voxel centre `c + ½` exactly this way.
     pub fn in_grid_space(dims: UVec3, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Self {
         let dims_f = dims.as_vec3a();
-        let dims = dims.as_ivec3();
         let mut dda = Self {
             origin: o.into(),
             inv: Vec3A::ZERO,
@@ -117,7 +116,7 @@ impl Dda {
             ahead: Vec3A::ZERO,
             parallel: BVec3A::FALSE,
             dims: dims_f,
-            brick_dims: (dims_f * (1.0 / BRICK_EDGE as f32)).ceil(),
+            brick_dims: ((dims + (BRICK_EDGE - 1)) / BRICK_EDGE).as_vec3a(),
             cell: Vec3A::ZERO,
             t: 0.0,
             t_end: 0.0,
@@ -130,47 +129,55 @@ impl Dda {
         if !(o.is_finite() && d.is_finite() && t_min <= t_max) {
             return dda;
         }
-        let parallel = d.abs().cmplt(Vec3::splat(f32::MIN_POSITIVE));
-        let d = Vec3::select(parallel, Vec3::ZERO, d);
-        if d == Vec3::ZERO {
+        // In SIMD lanes, each the expression of one axis.
+        let (o, d) = (Vec3A::from(o), Vec3A::from(d));
+        let parallel = d.abs().cmplt(Vec3A::splat(f32::MIN_POSITIVE));
+        let d = Vec3A::select(parallel, Vec3A::ZERO, d);
+        if d.cmpeq(Vec3A::ZERO).all() {
             return dda;
         }
-        dda.step_i = IVec3::select(parallel, IVec3::ZERO, d.signum().as_ivec3());
-        dda.step = dda.step_i.as_vec3a();
-        dda.up = dda.step.cmpgt(Vec3A::ZERO);
-        dda.inv = Vec3::select(parallel, Vec3::ZERO, d.recip()).into();
-        dda.dir = d.into();
-        dda.ahead = Vec3A::select(dda.up, Vec3A::ONE, Vec3A::ZERO);
-        dda.parallel = BVec3A::new(parallel.x, parallel.y, parallel.z);
-        // Clip [t_min, t_max] to the grid box; parallel axes must contain the origin.
+        // Parallel axes must contain the origin.
+        if (parallel & !(o.cmpge(Vec3A::ZERO) & o.cmplt(dims_f))).any() {
+            return dda;
+        }
+        let up = d.cmpgt(Vec3A::ZERO);
+        dda.step = Vec3A::select(
+            up,
+            Vec3A::ONE,
+            Vec3A::select(d.cmplt(Vec3A::ZERO), Vec3A::NEG_ONE, Vec3A::ZERO),
+        );
+        dda.step_i = trunc_ivec3(dda.step);
+        dda.up = up;
+        dda.inv = Vec3A::select(parallel, Vec3A::ZERO, d.recip());
+        dda.dir = d;
+        dda.ahead = Vec3A::select(up, Vec3A::ONE, Vec3A::ZERO);
+        dda.parallel = parallel;
+        // Clip [t_min, t_max] to the grid box: the slab times of all axes at once, then the
+        // axis-ordered comparisons (ties and signed zeros as one axis after the other).
+        let (near, far) =
+            (Vec3A::select(up, Vec3A::ZERO, dims_f), Vec3A::select(up, dims_f, Vec3A::ZERO));
+        let (tn, tf) = (((near - o) * dda.inv).to_array(), ((far - o) * dda.inv).to_array());
         let (mut t0, mut t1) = (t_min, t_max);
         let mut entry_axis = None;
         for a in 0..3 {
             if parallel.test(a) {
-                if !(o[a] >= 0.0 && o[a] < dims[a] as f32) {
-                    return dda;
-                }
                 continue;
             }
-            let (near, far) =
-                if d[a] > 0.0 { (0.0, dims[a] as f32) } else { (dims[a] as f32, 0.0) };
-            let tn = (near - o[a]) * dda.inv[a];
-            let tf = (far - o[a]) * dda.inv[a];
-            if tn > t0 {
-                t0 = tn;
+            if tn[a] > t0 {
+                t0 = tn[a];
                 entry_axis = Some(a);
             }
-            t1 = t1.min(tf);
+            t1 = t1.min(tf[a]);
         }
         if t0 >= t1 {
             return dda;
         }
         // Re-origin at the entry point for precision; `t` values stay those of the world ray.
         let start = if t0.is_finite() { t0 } else { 0.0 };
-        dda.origin = Vec3::select(parallel, o, o + d * start).into();
+        dda.origin = Vec3A::select(parallel, o, o + d * start);
         if let Some(a) = entry_axis {
             // Exactly on the entry face, so that its plane is crossed at t = 0.
-            dda.origin[a] = if d[a] > 0.0 { 0.0 } else { dims[a] as f32 };
+            dda.origin[a] = if up.test(a) { 0.0 } else { dims_f[a] };
         }
         dda.t_base = start;
         dda.t = t0 - start;
