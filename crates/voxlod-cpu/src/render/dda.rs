@@ -31,7 +31,7 @@ use glam::{BVec3A, IVec3, UVec3, Vec3, Vec3A};
 use voxlod_format::{BRICK_EDGE, GridSpec};
 
 use super::bricks::{BrickLookup, VoxelOccupancy};
-use super::lanes::{trunc_index, trunc_ivec3, trunc_uvec3};
+use super::lanes::{trunc_index, trunc_ivec3, trunc_uvec3, trunc_vec3a};
 
 /// One voxel along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -325,10 +325,10 @@ impl Dda {
         self.t = t;
     }
 
-    /// The brick holding the current cell.
+    /// The brick holding the current cell (cells are non-negative: truncation is the floor).
     #[inline(always)]
     fn brick(&self) -> Vec3A {
-        (self.cell * (1.0 / BRICK_EDGE as f32)).floor()
+        trunc_vec3a(self.cell * (1.0 / BRICK_EDGE as f32))
     }
 
     /// Looks up the current cell's brick if it changed; skips it (and every following empty
@@ -388,7 +388,7 @@ impl Dda {
     /// `t`, as stepping voxel by voxel would reach it; ends the walk if that is past its end.
     #[inline]
     fn skip_block(&mut self) {
-        let lo = (self.cell * 0.5).floor() * 2.0;
+        let lo = trunc_vec3a(self.cell * 0.5) * 2.0;
         let hi = (lo + 1.0).min(self.dims - 1.0);
         let exit_cell = Vec3A::select(self.up, hi, lo);
         let (t_exit, axes) = self.next_crossing(exit_cell);
@@ -475,7 +475,7 @@ impl Dda {
     #[inline]
     fn block_exit(&self, b: Vec3A) -> (f32, BVec3A, Vec3A) {
         let edge = BRICK_EDGE as f32;
-        let first = (b * 0.5).floor() * 2.0;
+        let first = trunc_vec3a(b * 0.5) * 2.0;
         let last = (first + 1.0).min(self.brick_dims - 1.0);
         let exit_brick = Vec3A::select(self.up, last, first);
         let lo = exit_brick * edge;

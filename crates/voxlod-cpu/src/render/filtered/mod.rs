@@ -35,9 +35,9 @@
 //! - **Shading.** The representation's [`Appearance::radiance`] for `v`, the light seen from
 //!   the voxel centre, the visibility and the ambient term; every representation shades with
 //!   the one [`crate::shading::shade`].
-//! - **Empty space.** Walks skip empty 8³ bricks and, inside allocated bricks, empty 2³
-//!   blocks (the DDA's [`Dda::next_occupied_voxel`]; same voxels and `t`s as stepping voxel by
-//!   voxel). Beyond that, only conservative bounds that shorten a walk's `t_max`: a pixel
+//! - **Empty space.** Walks skip empty 8³ bricks (whole empty 16³ blocks of bricks in one
+//!   jump) and, inside allocated bricks, empty 2³ blocks (the DDA's
+//!   [`Dda::next_occupied_voxel`]; same voxels and `t`s as stepping voxel by voxel). Beyond that, only conservative bounds that shorten a walk's `t_max`: a pixel
 //!   whose 8×8 tile no allocated brick projects onto is background without a walk, a camera
 //!   ray ends past the farthest brick projecting onto its tile, and a shadow ray toward a
 //!   directional light ends past the highest voxel projecting onto its cell of a light-space
