@@ -7,7 +7,8 @@
 //!   `vᵢ = 1` for a line with no hit at all, `0` for any hit (inside or outside the voxel,
 //!   front- or back-facing — the same booking as the Averages opacity).
 //! - **Objective**: `L(σ, γ) = Σᵢ (f(σℓᵢ, γ) − vᵢ)²` with the transmittance `f` of
-//!   [`super::transmittance`], evaluated in f64.
+//!   [`super::transmittance`], evaluated in f64, its sums in four interleaved lanes combined
+//!   in a fixed order (`Sums`): the same bits on every target, SIMD or not.
 //! - **γ profiled out**: `f = a + γ·b` is affine in γ (`a = max(1 − τ/2, 0)`,
 //!   `b = e^(−τ) − a`), so for a fixed σ the optimum is `γ* = clamp(Σb(v − a)/Σb², 0, 1)`,
 //!   rounded to the nearest byte (the lattice optimum of a convex quadratic). Where `Σb² = 0`
@@ -83,7 +84,7 @@ fn exp_neg(x: f64) -> f64 {
     // `n·LN2_HI/32` is exact for the n < 2²¹ that occur here.
     const LN2_HI_32: f64 = 6.931_471_803_691_238_2e-1 / 32.0;
     const LN2_LO_32: f64 = 1.908_214_929_270_587_7e-10 / 32.0;
-    // Branch-free (selects, not an early return), so that loops over it vectorize.
+    // Branch-free (selects, not an early return), so that the loss's lanes vectorize.
     let inside = x <= 708.0;
     let x = if inside { x.max(0.0) } else { 0.0 };
     // 0 ≤ x ≤ 708: truncation of `y + 0.5` rounds to nearest (ties up) without a libm call,
@@ -103,31 +104,6 @@ fn exp_neg(x: f64) -> f64 {
     // The power-of-two scaling is exact (no subnormals for x ≤ 708): one rounding.
     let e = p * (EXP2_NEG_32NDS[(n & 31) as usize] * f64::from_bits((1023 - q) << 52));
     if inside { e } else { 0.0 }
-}
-
-/// `out[i] = exp_neg(x[i])`, bit for bit (the same operations lane by lane), compiled for AVX2
-/// where the CPU has it: the loop vectorizes, four exponentials at a time.
-fn exp_neg_batch(x: &[f64], out: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { exp_neg_batch_avx2(x, out) };
-        return;
-    }
-    exp_neg_batch_any(x, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn exp_neg_batch_avx2(x: &[f64], out: &mut [f64]) {
-    exp_neg_batch_any(x, out);
-}
-
-#[inline(always)]
-fn exp_neg_batch_any(x: &[f64], out: &mut [f64]) {
-    for (o, &x) in out.iter_mut().zip(x) {
-        *o = exp_neg(x);
-    }
 }
 
 /// `2^(−j/32)` for `j = 0..32` (entry 16 is 1/√2: a table of digits, not a named constant).
@@ -176,32 +152,40 @@ struct Group {
     chord: f64,
 }
 
-/// The sums the profiled loss is made of, accumulated group by group in order.
+/// Lanes of the loss sums.
+const LANES: usize = 4;
+
+/// The sums the profiled loss is made of, in [`LANES`] lanes: group `i` (in slice order) adds
+/// into lane `i % 4`, and the lanes are combined as `(l₀ + l₁) + (l₂ + l₃)`. A fixed order,
+/// so every target gets the same bits, and four independent chains instead of one, which the
+/// loop runs in SIMD lanes.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
-    saa: f64,
-    sab: f64,
-    sbb: f64,
-    sma: f64,
-    smb: f64,
-    m: f64,
+    saa: [f64; LANES],
+    sab: [f64; LANES],
+    sbb: [f64; LANES],
+    sma: [f64; LANES],
+    smb: [f64; LANES],
+    m: [f64; LANES],
 }
 
 impl Sums {
-    /// Adds group `g` with `f = a + γ·b` at its chord ([`affine_parts`]).
+    /// Adds group `g` into `lane`, with `f = a + γ·b` at its chord ([`affine_parts`]).
     #[inline(always)]
-    fn add(&mut self, g: &Group, (a, b): (f64, f64)) {
-        self.saa += g.count * a * a;
-        self.sab += g.count * a * b;
-        self.sbb += g.count * b * b;
-        self.sma += g.visible * a;
-        self.smb += g.visible * b;
-        self.m += g.visible;
+    fn add(&mut self, lane: usize, g: &Group, (a, b): (f64, f64)) {
+        self.saa[lane] += g.count * a * a;
+        self.sab[lane] += g.count * a * b;
+        self.sbb[lane] += g.count * b * b;
+        self.sma[lane] += g.visible * a;
+        self.smb[lane] += g.visible * b;
+        self.m[lane] += g.visible;
     }
 
     /// The byte γ that minimizes the loss at σ code `code`, and the loss there.
     fn optimum(&self, code: u8) -> (u8, f64) {
-        let Sums { saa, sab, sbb, sma, smb, m } = *self;
+        let total = |l: [f64; LANES]| (l[0] + l[1]) + (l[2] + l[3]);
+        let (saa, sab, sbb) = (total(self.saa), total(self.sab), total(self.sbb));
+        let (sma, smb, m) = (total(self.sma), total(self.smb), total(self.m));
         let gamma_byte = if sbb > 0.0 {
             let g = ((smb - sab) / sbb).clamp(0.0, 1.0);
             (g * 255.0).round() as u8
@@ -217,11 +201,30 @@ impl Sums {
 }
 
 /// The profiled loss at σ code `code`: the byte γ that minimizes it and the loss there, from
-/// one pass of sums: with `n` lines and `m` visible per group, `L(γ) = Σn a² + 2γ Σn ab +
-/// γ² Σn b² − 2Σm a − 2γ Σm b + Σm`. The exponentials are taken in batches
-/// ([`exp_neg_batch`]); the sums are those of [`affine_parts`] group by group, bit for bit.
+/// one pass of sums ([`Sums`]): with `n` lines and `m` visible per group, `L(γ) = Σn a² +
+/// 2γ Σn ab + γ² Σn b² − 2Σm a − 2γ Σm b + Σm`. Compiled for AVX2 where the CPU has it
+/// (selected at run time): four groups per step, their exponentials and sums in SIMD lanes,
+/// the same operations lane by lane as the plain build, so the same bits.
 fn profile(groups: &[Group], code: u8) -> (u8, f64) {
-    /// Groups whose exponentials are taken in one batch.
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { profile_avx2(groups, code) };
+    }
+    profile_any(groups, code)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn profile_avx2(groups: &[Group], code: u8) -> (u8, f64) {
+    profile_any(groups, code)
+}
+
+/// The loop of [`profile`]: per batch of 64 groups (a multiple of [`LANES`], so that group
+/// `i` stays in lane `i % 4`), the exponentials in one loop, then the sums four groups at a
+/// time.
+#[inline(always)]
+fn profile_any(groups: &[Group], code: u8) -> (u8, f64) {
     const BATCH: usize = 64;
     let sigma = SIGMA_RANGE.decode(code) as f64;
     let mut sums = Sums::default();
@@ -231,11 +234,24 @@ fn profile(groups: &[Group], code: u8) -> (u8, f64) {
         for (t, g) in tau.iter_mut().zip(chunk) {
             *t = sigma * g.chord;
         }
-        exp_neg_batch(tau, e);
-        for ((g, &t), &e) in chunk.iter().zip(tau.iter()).zip(e.iter()) {
-            // `affine_parts(t)`, with its exponential from the batch.
+        for (e, &t) in e.iter_mut().zip(tau.iter()) {
+            *e = exp_neg(t);
+        }
+        // `affine_parts(τ)`, with its exponential from the loop above.
+        let parts = |t: f64, e: f64| {
             let a = (1.0 - 0.5 * t).max(0.0);
-            sums.add(g, (a, e - a));
+            (a, e - a)
+        };
+        let mut quads = chunk.chunks_exact(LANES);
+        let (mut ts, mut es) = (tau.chunks_exact(LANES), e.chunks_exact(LANES));
+        for ((q, t), e) in (&mut quads).zip(&mut ts).zip(&mut es) {
+            for j in 0..LANES {
+                sums.add(j, &q[j], parts(t[j], e[j]));
+            }
+        }
+        let rest = quads.remainder().iter().zip(ts.remainder()).zip(es.remainder());
+        for (j, ((g, &t), &e)) in rest.enumerate() {
+            sums.add(j, g, parts(t, e));
         }
     }
     sums.optimum(code)
@@ -469,43 +485,31 @@ mod tests {
     }
 
     #[test]
-    fn batched_profiles_are_the_scalar_ones_bit_for_bit() {
-        // Batches of exponentials (SIMD where the CPU has AVX2) against `exp_neg` one by one,
-        // over every code and group counts around the batch size; NaN, huge and negative
-        // arguments included.
-        let xs: Vec<f64> = (0..1000)
-            .map(|i| match i % 50 {
-                0 => f64::NAN,
-                1 => 708.0 + i as f64,
-                2 => -1.0,
-                _ => 800.0 * (rand_f32(i, 0, 7) as f64).powi(3),
-            })
-            .collect();
-        let mut out = vec![0.0; xs.len()];
-        exp_neg_batch(&xs, &mut out);
-        for (x, e) in xs.iter().zip(&out) {
-            assert_eq!(e.to_bits(), exp_neg(*x).to_bits(), "{x}");
-        }
-        for n in [1usize, 63, 64, 65, 150, 200] {
+    fn vectorized_profiles_are_the_scalar_ones_bit_for_bit() {
+        // `profile` (AVX2 lanes where the CPU has them) against its rule evaluated one group at
+        // a time in this plain build: every code, group counts around the lane count, chords
+        // of zero and up to 1.75 (τ up to 448).
+        for n in [1usize, 3, 4, 5, 31, 32, 150, 151] {
             let groups: Vec<Group> = (0..n as u32)
                 .map(|i| Group {
                     count: 1.0 + (i % 3) as f64,
                     visible: (i % 4 == 0) as u32 as f64,
-                    chord: 1.75 * rand_f32(i, n as u32, 3) as f64,
+                    chord: match i % 7 {
+                        0 => 0.0,
+                        _ => 1.75 * rand_f32(i, n as u32, 3) as f64,
+                    },
                 })
                 .collect();
             for code in 0..=255u8 {
                 let sigma = SIGMA_RANGE.decode(code) as f64;
-                // One group at a time with `affine_parts`, as before batching.
                 let mut sums = Sums::default();
-                groups.iter().for_each(|g| sums.add(g, affine_parts(sigma * g.chord)));
+                for (i, g) in groups.iter().enumerate() {
+                    sums.add(i % LANES, g, affine_parts(sigma * g.chord));
+                }
                 let (want_gamma, want_loss) = sums.optimum(code);
                 let (gamma, loss) = profile(&groups, code);
-                assert_eq!(
-                    (gamma, loss.to_bits()),
-                    (want_gamma, want_loss.to_bits()),
-                    "{n}, {code}"
-                );
+                let got = (gamma, loss.to_bits());
+                assert_eq!(got, (want_gamma, want_loss.to_bits()), "{n} groups, code {code}");
             }
         }
     }
