@@ -59,8 +59,14 @@ impl VjkFit {
 /// `f(τ, γ)` split as `(a, b)` with `f = a + γ·b`, in f64.
 #[inline(always)]
 fn affine_parts(tau: f64) -> (f64, f64) {
+    affine_parts_with(tau, exp_neg(tau))
+}
+
+/// [`affine_parts`] of `tau` given its exponential `e = e^(−τ)`.
+#[inline(always)]
+fn affine_parts_with(tau: f64, e: f64) -> (f64, f64) {
     let a = (1.0 - 0.5 * tau).max(0.0);
-    (a, exp_neg(tau) - a)
+    (a, e - a)
 }
 
 /// `e^(−x)` for `x ≥ 0` (and 0 for `x > 708` or NaN), within 3 ulp of libm's `exp` (tested): the
@@ -237,21 +243,16 @@ fn profile_any(groups: &[Group], code: u8) -> (u8, f64) {
         for (e, &t) in e.iter_mut().zip(tau.iter()) {
             *e = exp_neg(t);
         }
-        // `affine_parts(τ)`, with its exponential from the loop above.
-        let parts = |t: f64, e: f64| {
-            let a = (1.0 - 0.5 * t).max(0.0);
-            (a, e - a)
-        };
         let mut quads = chunk.chunks_exact(LANES);
         let (mut ts, mut es) = (tau.chunks_exact(LANES), e.chunks_exact(LANES));
         for ((q, t), e) in (&mut quads).zip(&mut ts).zip(&mut es) {
             for j in 0..LANES {
-                sums.add(j, &q[j], parts(t[j], e[j]));
+                sums.add(j, &q[j], affine_parts_with(t[j], e[j]));
             }
         }
         let rest = quads.remainder().iter().zip(ts.remainder()).zip(es.remainder());
         for (j, ((g, &t), &e)) in rest.enumerate() {
-            sums.add(j, g, parts(t, e));
+            sums.add(j, g, affine_parts_with(t, e));
         }
     }
     sums.optimum(code)

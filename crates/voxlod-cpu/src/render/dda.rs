@@ -469,9 +469,9 @@ impl Dda {
     /// Where the ray leaves the 2³-brick block holding brick `b` (which it is in): the `t`, the
     /// axes whose planes it crosses there, and the brick it enters then — on the axes crossed,
     /// the brick past the block; on the others, the block's near or far half by its middle
-    /// plane (see [`Dda::skip_empty_bricks`]). A block cut by the grid's end has one brick on that axis,
-    /// and the rule gives that brick: going down the ray is past the middle plane already,
-    /// going up it leaves the grid before reaching it.
+    /// plane (see [`Dda::skip_empty_bricks`]). A block cut by the grid's end has one brick on
+    /// that axis, and the rule gives that brick: going down the ray is past the middle plane
+    /// already, going up it leaves the grid before reaching it.
     #[inline]
     fn block_exit(&self, b: Vec3A) -> (f32, BVec3A, Vec3A) {
         let edge = BRICK_EDGE as f32;

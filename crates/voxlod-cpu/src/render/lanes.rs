@@ -92,7 +92,12 @@ mod tests {
             let i = trunc_index(bad);
             // Out of any table (or, for -0.5e-3 → 0, the cast's own answer).
             assert!(i == usize::MAX || i == 0, "{bad}: {i}");
-            let _ = trunc_ivec3(Vec3A::splat(bad));
+        }
+        // NaN and values out of i32's range: `i32::MIN` in every lane on x86-64 (the casts
+        // would saturate), never a panic.
+        #[cfg(target_arch = "x86_64")]
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 3e9, -3e9] {
+            assert_eq!(trunc_ivec3(Vec3A::splat(bad)), IVec3::splat(i32::MIN), "{bad}");
         }
         for x in [0.0, 0.25, 0.5, 7.999, 8.0, 12.5, 1048575.5, 2097151.0] {
             let v = Vec3A::new(x, x * 0.5, x + 1.0);

@@ -153,10 +153,11 @@ impl LightBounds {
         let (h1, h2, hw) = (half(e1), half(e2), half(l));
         let r = DVec2::new(h1, h2) + cell * 1e-3;
         let reach = (r / cell).ceil().as_uvec2();
-        // Each voxel's top into the cell of its centre (the cell `t_max` looks up, by the same
-        // expression; the truncation of `as u32` is the floor of these non-negative values),
-        // then the largest top within `reach` cells: a superset of the cells each projected
-        // box overlaps, so the bound stays conservative.
+        // Each voxel's top into the cell of its centre (the cell `t_max` looks up; the two
+        // compute the centre's projection in different orders, which `r`'s 10⁻³-cell slack
+        // covers; the truncation of `as u32` is the floor of these non-negative values), then
+        // the largest top within `reach` cells: a superset of the cells each projected box
+        // overlaps, so the bound stays conservative.
         let mut top = vec![f32::NEG_INFINITY; n];
         let inv_cell = cell.recip();
         // Per brick, its corner's (u, v, w); per local Morton code, the offset of that voxel's
