@@ -48,7 +48,7 @@ mod tests;
 
 use std::path::Path;
 
-pub use crc32::{Crc32, crc32};
+pub use crc32::crc32;
 pub use record::{Occupancy, VxlRecord, tag_name};
 
 use crate::{BrickMap, Error, GridSpec, Result};

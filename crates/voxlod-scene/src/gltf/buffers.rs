@@ -11,29 +11,19 @@ use crate::Result;
 
 /// Decodes standard base64 (padding optional), naming the offset of a bad character.
 pub(super) fn base64(text: &str) -> std::result::Result<Vec<u8>, String> {
-    let text = text.trim_end_matches('=');
-    let mut out = Vec::with_capacity(text.len() * 3 / 4);
-    let (mut acc, mut bits) = (0u32, 0u32);
-    for (i, c) in text.bytes().enumerate() {
-        let v = match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' => 62,
-            b'/' => 63,
-            _ => return Err(format!("invalid base64 character {:?} at offset {i}", c as char)),
-        };
-        acc = (acc << 6) | u32::from(v);
-        bits += 6;
-        if bits >= 8 {
-            bits -= 8;
-            out.push((acc >> bits) as u8);
+    use ::base64::DecodeError;
+    // The decoder checks the length before the alphabet: name a bad character first.
+    let bad = text.bytes().position(|c| !(c.is_ascii_alphanumeric() || b"+/=".contains(&c)));
+    if let Some(i) = bad {
+        let c = text.as_bytes()[i] as char;
+        return Err(format!("invalid base64 character {c:?} at offset {i}"));
+    }
+    ::base64::decode_config(text, ::base64::STANDARD).map_err(|e| match e {
+        DecodeError::InvalidByte(i, c) | DecodeError::InvalidLastSymbol(i, c) => {
+            format!("invalid base64 character {:?} at offset {i}", c as char)
         }
-    }
-    if bits >= 6 {
-        return Err("truncated base64 (a lone final character)".into());
-    }
-    Ok(out)
+        DecodeError::InvalidLength => "truncated base64 (a lone final character)".into(),
+    })
 }
 
 /// Decodes `%XX` escapes of a relative URI into a path.
