@@ -106,7 +106,7 @@ pub enum Shadows<'a> {
     /// it), `V = 1 − A` with `A` its accumulated opacity. Soft where the opacities are partial; its own leaks are the
     /// octree's.
     March {
-        /// Start offset in voxels, ≥ 0 (1.5 as seed 000's shadow rays skip voxels closer than
+        /// Start offset in voxels, ≥ 0 (1.5 as Brito et al. 2023's shadow rays skip voxels closer than
         /// 1.5 voxel sizes).
         offset_voxels: f32,
         /// Step in voxels, in \[0.05, 4\].

@@ -1,4 +1,4 @@
-//! Voxel cone tracing on voxlod's sparse voxel octree (seed 002 §4.5, after Crassin et al.
+//! Voxel cone tracing on voxlod's sparse voxel octree (Yalçıner and Sahillioğlu 2020, §4.5, after Crassin et al.
 //! 2011): direct light injected into the leaves and pre-filtered upward, then cones marched
 //! front to back from shading points for ambient occlusion, diffuse indirect light and a
 //! specular cone.

@@ -1,4 +1,4 @@
-//! Tests of the cone march, injection, the tracer and the extremes (issue 5).
+//! Tests of the cone march, injection, the tracer and the extremes.
 
 use glam::{DVec3, UVec3, Vec3};
 use voxlod_format::GridSpec;
@@ -408,7 +408,7 @@ fn directional_opacities_leak_less_through_a_thin_wall() {
 
 #[test]
 fn a_depth_16_octree_over_a_sparse_scene_traces() {
-    // Issue 5's extreme: 65536³ virtual voxels, three occupied ones, only their nodes exist.
+    // An extreme case: 65536³ virtual voxels, three occupied ones, only their nodes exist.
     let g = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(65_536)).unwrap();
     let v = [
         (UVec3::new(0, 0, 0), white(Vec3::Y)),

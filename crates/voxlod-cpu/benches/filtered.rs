@@ -18,10 +18,10 @@ use std::time::Instant;
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
-use voxlod_cpu::appearance::vmesh::VirtualMeshGrid;
-use voxlod_cpu::appearance::{Appearance, averages, sggx, vmesh};
+use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
 use voxlod_cpu::render::filtered::{self, FrameCache};
 use voxlod_cpu::voxelize::{self, voxelize};
 use voxlod_format::{BrickMap, GridSpec};
@@ -138,7 +138,8 @@ fn renders(c: &mut Criterion) {
     }
     if wanted("virtual-mesh") {
         let start = Instant::now();
-        let mesh = VirtualMeshGrid::new(precompute(&ctx, &options, vmesh::fit).expect("vmesh"));
+        let mesh =
+            VirtualMeshGrid::new(precompute(&ctx, &options, virtual_mesh::fit).expect("vmesh"));
         eprintln!("virtual mesh precompute: {:.2} s on all cores", start.elapsed().as_secs_f64());
         bench_representation(&mut group, "virtual-mesh", &mesh, &mesh.grid.records, &view);
     }

@@ -14,9 +14,9 @@ mod support;
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
-use voxlod_cpu::appearance::{averages, sggx, subgrid, vmesh};
+use voxlod_cpu::appearance::{averages, sggx, subgrid, virtual_mesh};
 use voxlod_scene::Scene;
 
 use support::{bunny, forest_of, pool, single_core, voxelized};
@@ -68,7 +68,7 @@ fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene, res: u32, samples: 
         );
     }
     if wanted("virtual-mesh") {
-        let fit = || precompute(&ctx, &opts, vmesh::fit).expect("fitted");
+        let fit = || precompute(&ctx, &opts, virtual_mesh::fit).expect("fitted");
         report("virtual-mesh fit", single_core(fit).1);
     }
 

@@ -1,4 +1,4 @@
-//! The metavoxel pipeline per stage (issue 6): binning, fill, propagation (all with culling
+//! The metavoxel pipeline per stage: binning, fill, propagation (all with culling
 //! against the view) and the eye march at 512×512, for 10³, 10⁴ and 10⁵ particles of radius 4–16
 //! voxels in a 1024³ volume (32³ metavoxels of 32³), and the smoke-column preset (10⁴ particles)
 //! as a whole frame.

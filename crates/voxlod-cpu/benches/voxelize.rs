@@ -5,7 +5,7 @@
 //! - `engine_121k`: the 2CylinderEngine glTF model of `assets/` (121 496 triangles);
 //! - `bunny_3.7k`: the bunny of `assets/`.
 //!
-//! Targets (issue 2, 2 cores): ≥ 2 M triangles/s per core for the 1 M+-triangle scene,
+//! Targets (2 cores): ≥ 2 M triangles/s per core for the 1 M+-triangle scene,
 //! occupancy only; < 80 ms for the 120 k-triangle model.
 //!
 //! Run with `cargo bench -p voxlod-cpu --bench voxelize`. On a machine shared with other

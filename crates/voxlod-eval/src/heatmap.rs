@@ -6,7 +6,7 @@
 
 use voxlod_scene::Srgb8Image;
 
-use crate::metrics::check_pair;
+use crate::pair::check_pair;
 use crate::{Error, Result};
 
 /// Stops of the ramp at t = 0, 0.25, 0.5, 0.75, 1 (inferno's values there, sRGB).

@@ -52,6 +52,7 @@ mod error;
 pub mod heatmap;
 pub mod json;
 pub mod metrics;
+mod pair;
 pub mod patterns;
 pub mod report;
 pub mod ssim;

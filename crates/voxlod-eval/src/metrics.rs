@@ -7,7 +7,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use voxlod_scene::Srgb8Image;
 
-use crate::{Error, Result, ssim};
+use crate::pair::check_pair;
+use crate::{Result, ssim};
 
 /// MSE, PSNR and SSIM of one image against a reference.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -19,37 +20,6 @@ pub struct ImageMetrics {
     pub psnr: f64,
     /// Mean SSIM ([`ssim::ssim`]).
     pub ssim: f64,
-}
-
-/// Checks that two images can be compared by `metric`: consistent buffers, equal sizes, and
-/// both sides at least `min` pixels.
-pub(crate) fn check_pair(
-    a: &Srgb8Image,
-    b: &Srgb8Image,
-    metric: &'static str,
-    min: u32,
-) -> Result<()> {
-    for img in [a, b] {
-        if img.pixels.len() as u64 != u64::from(img.width) * u64::from(img.height) {
-            return Err(Error::PixelCount {
-                width: img.width,
-                height: img.height,
-                pixels: img.pixels.len(),
-            });
-        }
-    }
-    if (a.width, a.height) != (b.width, b.height) {
-        return Err(Error::SizeMismatch {
-            a_width: a.width,
-            a_height: a.height,
-            b_width: b.width,
-            b_height: b.height,
-        });
-    }
-    if a.width < min || a.height < min {
-        return Err(Error::ImageTooSmall { metric, width: a.width, height: a.height, min });
-    }
-    Ok(())
 }
 
 /// Mean squared error of two images of the same size, on values scaled to [0, 1], averaged over
@@ -105,6 +75,7 @@ mod tests {
     use proptest::prelude::*;
 
     use super::*;
+    use crate::Error;
     use crate::patterns;
 
     #[test]

@@ -19,7 +19,7 @@
 use rayon::prelude::*;
 use voxlod_scene::Srgb8Image;
 
-use crate::metrics::check_pair;
+use crate::pair::check_pair;
 use crate::{Result, heatmap};
 
 /// Standard deviation of the Gaussian window, in pixels.

@@ -1,4 +1,4 @@
-//! Cross-check of MSE, PSNR and SSIM against scikit-image (issue 2: "It must agree with
+//! Cross-check of MSE, PSNR and SSIM against scikit-image (the requirement: "It must agree with
 //! scikit-image's `structural_similarity(..., gaussian_weights=True, sigma=1.5,
 //! use_sample_covariance=False, data_range=1.0, channel_axis=-1)` to 1e-4").
 //!

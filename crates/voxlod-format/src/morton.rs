@@ -56,6 +56,44 @@ pub const fn decode(code: u64) -> UVec3 {
     UVec3::new(compact1by2(code), compact1by2(code >> 1), compact1by2(code >> 2))
 }
 
+/// The Morton-code bits of each axis (x: bits 0, 3, 6, …; y: 1, 4, 7, …; z: 2, 5, 8, …).
+pub const AXIS_BITS: [u64; 3] =
+    [0x1249_2492_4924_9249, 0x1249_2492_4924_9249 << 1, 0x1249_2492_4924_9249 << 2];
+
+/// The code one step down axis `axis` (0, 1, 2), or `None` at coordinate 0, without decoding.
+///
+/// ```
+/// use glam::UVec3;
+/// use voxlod_format::morton::{encode, step_down};
+/// assert_eq!(step_down(encode(UVec3::new(4, 7, 1)), 1), Some(encode(UVec3::new(4, 6, 1))));
+/// assert_eq!(step_down(encode(UVec3::new(4, 0, 1)), 1), None);
+/// ```
+#[inline]
+pub fn step_down(code: u64, axis: usize) -> Option<u64> {
+    let m = AXIS_BITS[axis];
+    let field = code & m;
+    (field != 0).then_some((field.wrapping_sub(1) & m) | (code & !m))
+}
+
+/// The code one step up axis `axis` (0, 1, 2) in a grid of `2^res_log2` cells per axis
+/// (`res_log2` ≤ 21), or `None` past the grid's edge, without decoding.
+///
+/// ```
+/// use glam::UVec3;
+/// use voxlod_format::morton::{encode, step_up};
+/// assert_eq!(step_up(encode(UVec3::new(3, 0, 0)), 0, 3), Some(encode(UVec3::new(4, 0, 0))));
+/// assert_eq!(step_up(encode(UVec3::new(7, 0, 0)), 0, 3), None);
+/// ```
+#[inline]
+pub fn step_up(code: u64, axis: usize, res_log2: u32) -> Option<u64> {
+    let m = AXIS_BITS[axis];
+    // The field of coordinate `2^res_log2 − 1`: every axis bit below bit 3·res_log2.
+    if code & m == m & ((1u64 << (3 * res_log2)) - 1) {
+        return None;
+    }
+    Some(((code | !m).wrapping_add(1)) & m | (code & !m))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,6 +128,34 @@ mod tests {
             // Dropping 3·level low bits of the code is the code of the parent cell at that level.
             let c = UVec3::new(x, y, z);
             prop_assert_eq!(encode(c) >> (3 * level), encode(c >> level));
+        }
+    }
+
+    proptest! {
+        /// The Morton-code steps (no decode) against decode, step, encode.
+        #[test]
+        fn morton_steps_equal_decode_step_encode(x in 0u32..1 << 21, y in 0u32..1 << 21, z in 0u32..1 << 21, res_log2 in 0u32..=21) {
+            let c = UVec3::new(x, y, z) & UVec3::splat((1u32 << res_log2) - 1);
+            let code = encode(c);
+            for a in 0..3 {
+                let mut up = c;
+                up[a] += 1;
+                let want_up = (up[a] < 1 << res_log2).then(|| encode(up));
+                prop_assert_eq!(step_up(code, a, res_log2), want_up);
+                let want_down = (c[a] > 0).then(|| { let mut d = c; d[a] -= 1; encode(d) });
+                prop_assert_eq!(step_down(code, a), want_down);
+            }
+        }
+    }
+
+    #[test]
+    fn morton_steps_stop_at_the_edges() {
+        for res_log2 in [0, 1, 5, 21] {
+            let max = UVec3::splat((1u32 << res_log2) - 1);
+            for a in 0..3 {
+                assert_eq!(step_up(encode(max), a, res_log2), None, "{res_log2} {a}");
+                assert_eq!(step_down(0, a), None);
+            }
         }
     }
 }

@@ -189,9 +189,9 @@ fn ground_truth(c: &mut Criterion) {
 
 fn filtered(c: &mut Criterion) {
     use voxlod_cpu::appearance::adaptive::{AdaptiveOptions, Candidates};
+    use voxlod_cpu::appearance::line_sampler::SamplingContext;
     use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-    use voxlod_cpu::appearance::sampler::SamplingContext;
-    use voxlod_cpu::appearance::vmesh::{self, VirtualMeshGrid};
+    use voxlod_cpu::appearance::virtual_mesh::{self, VirtualMeshGrid};
     use voxlod_cpu::appearance::{averages, sggx};
     use voxlod_cpu::render::filtered::{FrameCache, Options, render};
     use voxlod_gpu::filtered::FilteredKernel;
@@ -206,7 +206,7 @@ fn filtered(c: &mut Criterion) {
     let opts = PrecomputeOptions { rays: 32, seed: 0 };
     let avg = precompute(&sampling, &opts, averages::fit).unwrap();
     let vjk = precompute(&sampling, &opts, sggx::fit).unwrap();
-    let vm = VirtualMeshGrid::new(precompute(&sampling, &opts, vmesh::fit).unwrap());
+    let vm = VirtualMeshGrid::new(precompute(&sampling, &opts, virtual_mesh::fit).unwrap());
     let adaptive_options = AdaptiveOptions { rays: 32, heldout: 64, ..Default::default() };
     let candidates = Candidates::build(&sampling, &adaptive_options).unwrap();
     let adaptive = candidates.select(0.08).unwrap();
@@ -324,8 +324,8 @@ fn octree(c: &mut Criterion) {
 
 fn precompute(c: &mut Criterion) {
     use voxlod_cpu::appearance::averages;
+    use voxlod_cpu::appearance::line_sampler::SamplingContext;
     use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-    use voxlod_cpu::appearance::sampler::SamplingContext;
     use voxlod_gpu::precompute::{Outputs, Precomputer};
     let ctx = context();
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
@@ -355,8 +355,8 @@ fn cone(c: &mut Criterion) {
     use rayon::prelude::*;
     use voxlod_cone::{ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
     use voxlod_cpu::appearance::averages;
+    use voxlod_cpu::appearance::line_sampler::SamplingContext;
     use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-    use voxlod_cpu::appearance::sampler::SamplingContext;
     use voxlod_gpu::cone::{ConeKernel, ConeQuery, ShadingPoint, reference};
     use voxlod_octree::{AveragePayload, BuildOptions, Octree};
     let (width, height) = (1280, 720);

@@ -36,7 +36,8 @@ use glam::UVec3;
 use rayon::prelude::*;
 use voxlod_format::{BrickMap, GridSpec, morton};
 
-use crate::octree::{BuildOptions, Level, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
+use crate::input::{all_codes_ok, code_problem, plan};
+use crate::octree::{BuildOptions, Level, NONE, Octree};
 use crate::payload::Payload;
 use crate::topology::{Topology, TopologyLevel};
 use crate::{Error, Result};
@@ -214,79 +215,6 @@ impl<P: Payload> Octree<P> {
     }
 }
 
-/// Depth and finest dense level `(depth, first_dense)` of the octree over a grid of `dims`
-/// (the input checks every build shares, public so that other backends report the same errors).
-pub fn plan(dims: UVec3, options: &BuildOptions) -> Result<(u32, u32)> {
-    let needed = dims.max_element().next_power_of_two().trailing_zeros();
-    let depth = options.depth.unwrap_or(needed);
-    if depth > MAX_DEPTH {
-        return Err(Error::TooDeep { requested: depth, max: MAX_DEPTH });
-    }
-    if depth < needed {
-        return Err(Error::GridDoesNotFit { dims, depth, res: 1 << depth });
-    }
-    if options.dense_log2 > MAX_DENSE_LOG2 {
-        return Err(Error::DenseTooLarge {
-            requested_log2: options.dense_log2,
-            res: 1u64 << options.dense_log2.min(63),
-            max_log2: MAX_DENSE_LOG2,
-        });
-    }
-    Ok((depth, depth - options.dense_log2.min(depth)))
-}
-
-/// What is wrong with voxel `code` after `prev` (outside the grid, repeated, out of order), if
-/// anything.
-pub(crate) fn code_problem(dims: UVec3, code: u64, prev: Option<u64>) -> Option<Error> {
-    let coord = morton::decode(code);
-    if code >> 63 != 0 || !coord.cmplt(dims).all() {
-        return Some(Error::OutOfBounds { coord, dims });
-    }
-    let prev = prev?;
-    if prev == code {
-        return Some(Error::DuplicateVoxel { coord });
-    }
-    (prev > code).then_some(Error::OutOfOrder { coord, code })
-}
-
-/// Whether every one of the `n` codes `code(i)` lies inside `dims` (whose components are
-/// positive) and is greater than the one before, and `extra(i)` holds: a parallel pass without
-/// decoding (a coordinate is below a bound iff its interleaved bits, masked out of the code,
-/// are below the bound's interleaved bits). The error itself is found by [`code_problem`] only
-/// when this fails.
-pub(crate) fn all_codes_ok(
-    dims: UVec3,
-    n: usize,
-    code: impl Fn(usize) -> u64 + Sync,
-    extra: impl Fn(usize) -> bool + Sync,
-) -> bool {
-    let limit: [u64; 3] = std::array::from_fn(|a| {
-        let mut c = UVec3::ZERO;
-        c[a] = dims[a].saturating_sub(1);
-        morton::encode(c)
-    });
-    let inside = |c: u64| {
-        (c & AXIS_BITS[0] <= limit[0])
-            & (c & AXIS_BITS[1] <= limit[1])
-            & (c & AXIS_BITS[2] <= limit[2])
-    };
-    // Chunks checked without early exit inside (branch-free), in parallel.
-    dims.min_element() > 0
-        && (0..n.div_ceil(CHECK_LEN)).into_par_iter().all(|chunk| {
-            let (lo, hi) = (chunk * CHECK_LEN, ((chunk + 1) * CHECK_LEN).min(n));
-            let mut prev = if lo == 0 { None } else { Some(code(lo - 1)) };
-            (lo..hi).fold(true, |ok, i| {
-                let c = code(i);
-                let ordered = prev.is_none_or(|p| p < c);
-                prev = Some(c);
-                ok & inside(c) & ordered & extra(i)
-            })
-        })
-}
-
-/// Items per rayon task of the input check (a few nanoseconds each).
-const CHECK_LEN: usize = 1 << 15;
-
 /// Checks the input, so the error names the first bad voxel.
 fn check_input<P: Payload>(dims: UVec3, voxels: &[(u64, P)]) -> Result<()> {
     let ok = all_codes_ok(dims, voxels.len(), |i| voxels[i].0, |i| voxels[i].1.check().is_none());
@@ -363,29 +291,6 @@ const SHIFTS: [u8; 256] = {
     t
 };
 
-/// The Morton-code bits of axis `a` (x: bits 0, 3, 6, …).
-const AXIS_BITS: [u64; 3] =
-    [0x1249_2492_4924_9249, 0x1249_2492_4924_9249 << 1, 0x1249_2492_4924_9249 << 2];
-
-/// The code one step down axis `a`, or `None` at coordinate 0. No decode.
-#[inline]
-pub(crate) fn morton_dec(code: u64, a: usize) -> Option<u64> {
-    let m = AXIS_BITS[a];
-    let field = code & m;
-    (field != 0).then_some((field.wrapping_sub(1) & m) | (code & !m))
-}
-
-/// The code one step up axis `a` at resolution `2^res_log2` (≤ 21), or `None` past the edge.
-#[inline]
-pub(crate) fn morton_inc(code: u64, a: usize, res_log2: u32) -> Option<u64> {
-    let m = AXIS_BITS[a];
-    // The field of coordinate `2^res_log2 − 1`: every axis bit below bit 3·res_log2.
-    if code & m == m & ((1u64 << (3 * res_log2)) - 1) {
-        return None;
-    }
-    Some(((code | !m).wrapping_add(1)) & m | (code & !m))
-}
-
 /// A dense level: every payload, indexed by Morton code (child pointers and masks of the
 /// finest dense level are set when the level below is built).
 fn dense_level<P: Payload>(res_log2: u32, occupied: &Occupied<'_, P>) -> Level<P> {
@@ -424,7 +329,10 @@ fn dense_tile_marks<P>(level: &Level<P>, occupied: &Occupied<'_, P>) -> Vec<bool
                 continue;
             }
             let c =
-                (0..3).try_fold(q, |c, a| if d >> a & 1 == 1 { morton_dec(c, a) } else { Some(c) });
+                (0..3).try_fold(
+                    q,
+                    |c, a| if d >> a & 1 == 1 { morton::step_down(c, a) } else { Some(c) },
+                );
             if let Some(c) = c {
                 marked[c as usize] = true;
             }
@@ -572,7 +480,8 @@ fn links<P: Payload>(tiles: &[u32], parent: &Level<P>) -> Vec<[u32; 3]> {
             NONE
         } else {
             // Node `8t + bit` has its a-bit set: its +a neighbour is node 0 of that tile.
-            morton_inc((8 * t + (1 << a)) as u64, a, parent.res_log2).map_or(NONE, |q| q as u32)
+            morton::step_up((8 * t + (1 << a)) as u64, a, parent.res_log2)
+                .map_or(NONE, |q| q as u32)
         }
     };
     let mut out = vec![[0u32; 3]; tiles.len()];

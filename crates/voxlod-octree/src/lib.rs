@@ -1,4 +1,4 @@
-//! Sparse voxel octrees for voxel cone tracing (seed 002 §4.3–4.4): built bottom-up from
+//! Sparse voxel octrees for voxel cone tracing (Yalçıner and Sahillioğlu 2020, §4.3–4.4, after Crassin et al. 2011): built bottom-up from
 //! Morton-sorted voxels, top levels stored densely (the paper's 64³ by default), sparse levels
 //! as 2×2×2 node tiles with child pointers, forward neighbour links on +x, +y, +z and the extra
 //! nodes that make every trilinear interpolation find its data, pre-filtered payloads, and
@@ -13,12 +13,12 @@
 //! | `sample` | [`Octree::sample`] (position + footprint diameter), [`Octree::sample_level`] |
 //! | `validate` | [`Octree::validate`]: every structural invariant |
 //! | [`stats`] | [`MemoryStats`]: nodes per level, bytes by role, bytes per voxel |
-//! | [`flat`] | [`FlatOctree`]: the `#[repr(C)]` GPU layout, and a CPU emulation of the lock-free level-by-level GPU build |
+//! | [`gpu_layout`] | [`FlatOctree`]: the `#[repr(C)]` GPU layout, and a CPU emulation of the lock-free level-by-level GPU build |
 //!
 //! This crate depends on `voxlod-format` only (no GPU API, no scene crate), so another project
 //! can use it alone. Out of scope: merging virtual-mesh records across levels (open research,
-//! seed 000 §6), light injection and cone tracing (`voxlod-cone`), the wgpu kernel of the build
-//! (voxlod-gpu's `octree` module; its algorithm is emulated and checked in [`flat`]).
+//! Brito et al. 2023, §6), light injection and cone tracing (`voxlod-cone`), the wgpu kernel of the build
+//! (voxlod-gpu's `octree` module; its algorithm is emulated and checked in [`gpu_layout`]).
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
@@ -49,7 +49,8 @@
 
 mod build;
 mod error;
-pub mod flat;
+pub mod gpu_layout;
+mod input;
 pub mod octree;
 pub mod payload;
 mod sample;
@@ -57,9 +58,9 @@ pub mod stats;
 pub mod topology;
 mod validate;
 
-pub use build::plan;
 pub use error::{Error, Result};
-pub use flat::{FlatOctree, GpuLevel, GpuNode, GpuTile};
+pub use gpu_layout::{FlatOctree, GpuLevel, GpuNode, GpuTile};
+pub use input::plan;
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 pub use payload::{AveragePayload, DIRECTIONS, Directional, Payload, SggxPayload};
 pub use stats::{LevelStats, MemoryStats};

@@ -131,7 +131,7 @@ impl<P> LevelView<'_, P> {
         }
         let n = if self.dense {
             let res_log2 = self.resolution.trailing_zeros();
-            crate::build::morton_inc(node as u64, axis, res_log2).map_or(NONE, |c| c as u32)
+            voxlod_format::morton::step_up(node as u64, axis, res_log2).map_or(NONE, |c| c as u32)
         } else {
             sparse_neighbour(self.tile_links, node, axis)
         };

@@ -20,8 +20,8 @@
 //!   assumes the coverage of the two composited children uncorrelated: partial coverage that is
 //!   aligned across layers (a wall seen edge-on) is over-estimated — a one-voxel wall across an
 //!   8³ grid seen along its plane gets 0.305 at the root instead of its true 1/8 (tested).
-//! - **Virtual-mesh records** (seed 000) are not supported: merging them across levels is open
-//!   research (seed 000 §6) and out of scope.
+//! - **Virtual-mesh records** (Brito et al. 2023) are not supported: merging them across levels is open
+//!   research (Brito et al. 2023, §6) and out of scope.
 
 use glam::{Mat3, Vec3};
 use voxlod_format::records::{AverageRecord, SggxRecord};

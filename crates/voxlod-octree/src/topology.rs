@@ -25,7 +25,7 @@ use voxlod_format::{GridSpec, morton};
 
 #[cfg(doc)]
 use crate::Octree;
-use crate::build::{all_codes_ok, code_problem, plan};
+use crate::input::{all_codes_ok, code_problem, plan};
 use crate::octree::{BuildOptions, NONE};
 use crate::{Error, Result};
 

@@ -46,11 +46,12 @@ use voxlod_format::records::{
 use voxlod_format::{BrickMap, GridSpec, morton};
 use voxlod_scene::LightSample;
 
-use super::sampler::SamplingContext;
-use super::samples::VoxelSamples;
-use super::vmesh::VirtualMeshParams;
+use super::line_sampler::SamplingContext;
+use super::virtual_mesh::VirtualMeshParams;
+use super::voxel_samples::VoxelSamples;
 use super::{
-    Appearance, Opacity, RecordAppearance, averages, precompute, sggx, subgrid, vjk, vmesh,
+    Appearance, Opacity, RecordAppearance, averages, nonexp, precompute, sggx, subgrid,
+    virtual_mesh,
 };
 use crate::{Error, Result};
 
@@ -264,11 +265,11 @@ impl Candidates {
                 |(fit, held), i| {
                     ctx.sample_voxel_seeded(i, options.seed, 0, options.rays, fit);
                     let average = averages::fit(fit)?;
-                    // One SGGX estimate for both records (what `sggx::fit` and `vmesh::fit`
+                    // One SGGX estimate for both records (what `sggx::fit` and `virtual_mesh::fit`
                     // would each compute).
                     let estimate = sggx::estimate_samples(fit)?;
-                    let sggx = sggx::record(fit, &estimate, vjk::fit(&fit.rays));
-                    let vmesh = vmesh::fit_with(fit, &estimate, subgrid::build(fit));
+                    let sggx = sggx::record(fit, &estimate, nonexp::fit(&fit.rays));
+                    let vmesh = virtual_mesh::fit_with(fit, &estimate, subgrid::build(fit));
                     let spec = specular.then(|| precompute::specular_record(fit));
                     ctx.sample_voxel_seeded(i, options.seed, options.rays, options.heldout, held);
                     let h = HeldOut::new(held);
@@ -515,7 +516,7 @@ impl Appearance for AdaptiveGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::appearance::samples::{RaySample, SurfaceSample};
+    use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
 
     #[test]
     fn the_cheapest_kind_under_the_threshold_wins_else_the_least_error() {

@@ -25,7 +25,7 @@ use voxlod_scene::LightSample;
 
 use super::Opacity;
 use super::eigen::symmetric_eigen;
-use super::samples::VoxelSamples;
+use super::voxel_samples::VoxelSamples;
 use super::{RecordAppearance, record_material};
 use crate::shading::shade;
 use voxlod_format::records::SpecularRecord;
@@ -105,7 +105,7 @@ mod tests {
     use voxlod_scene::MaterialSample;
 
     use super::*;
-    use crate::appearance::samples::{RaySample, SurfaceSample};
+    use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
     use crate::appearance::{Appearance, AppearanceGrid};
 
     fn line(occluded: bool, normal: Option<Vec3>, albedo: Vec3) -> RaySample {

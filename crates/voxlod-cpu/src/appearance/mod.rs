@@ -1,24 +1,24 @@
-//! Filtered voxel appearance (HPG 2023 paper, seed 000; design and every open choice in
+//! Filtered voxel appearance (Brito, Poulin and Teichrieb, HPG 2023; design and every open choice in
 //! `docs/design/filtered-appearance.md`): per-voxel ray sampling from outside the voxel
-//! ([`samples`]), the records each representation fits to those samples, and how each record
+//! ([`voxel_samples`], drawn by [`line_sampler`]), the records each representation fits to those samples, and how each record
 //! answers the two questions a voxel renderer asks — how much light does this voxel stop along
 //! a direction ([`Opacity`]), and what radiance does it send toward the viewer
 //! ([`Appearance::radiance`]).
 //!
-//! All representations are fitted from the same [`samples::VoxelSamples`] of a voxel, so their
+//! All representations are fitted from the same [`voxel_samples::VoxelSamples`] of a voxel, so their
 //! differences measure the representation, not the sampling.
 
 pub mod adaptive;
 pub mod averages;
 pub mod eigen;
+pub mod line_sampler;
+pub mod nonexp;
 pub mod precompute;
-pub mod sampler;
-pub mod samples;
 pub mod sggx;
 pub mod subgrid;
 pub mod transmittance;
-pub mod vjk;
-pub mod vmesh;
+pub mod virtual_mesh;
+pub mod voxel_samples;
 
 use glam::Vec3;
 use voxlod_format::records::SpecularRecord;

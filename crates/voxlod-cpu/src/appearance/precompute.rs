@@ -19,8 +19,8 @@ use voxlod_format::morton;
 use voxlod_format::records::SpecularRecord;
 
 use super::AppearanceGrid;
-use super::sampler::SamplingContext;
-use super::samples::VoxelSamples;
+use super::line_sampler::SamplingContext;
+use super::voxel_samples::VoxelSamples;
 use crate::{Error, Result};
 
 /// Options of [`precompute`]. Cost is linear in `rays`.

@@ -16,7 +16,7 @@
 //!   [`shading_point`] (the diffuse-microflake estimator with `shade()` as the per-flake
 //!   response; specular materials feed the same normals to its Blinn–Phong).
 //! - **Opacity**: [`Opacity::NonExponential`] with the record's σ and γ (fitted by
-//!   [`super::vjk::fit`]).
+//!   [`super::nonexp::fit`]).
 
 use std::f32::consts::{PI, TAU};
 
@@ -25,8 +25,8 @@ use voxlod_format::records::SggxRecord;
 use voxlod_scene::{LightSample, MaterialSample};
 
 use super::eigen::symmetric_eigen;
-use super::samples::VoxelSamples;
-use super::{Opacity, vjk};
+use super::voxel_samples::VoxelSamples;
+use super::{Opacity, nonexp};
 use super::{RecordAppearance, record_material};
 use crate::shading::shade;
 use voxlod_format::records::SpecularRecord;
@@ -106,11 +106,11 @@ pub fn estimate(normals: &[Vec3]) -> Option<SggxFit> {
 }
 
 /// Fits a voxel's [`SggxRecord`]: the SGGX of its case-(a) normals, the mean case-(a) albedo
-/// and the \[VJK21\] σ, γ of [`vjk::fit`] over all its lines. `None` when no line hit a front
+/// and the \[VJK21\] σ, γ of [`nonexp::fit`] over all its lines. `None` when no line hit a front
 /// face inside the voxel (such a voxel has no appearance record, note §2).
 pub fn fit(samples: &VoxelSamples) -> Option<SggxRecord> {
     let sggx = estimate_samples(samples)?;
-    Some(record(samples, &sggx, vjk::fit(&samples.rays)))
+    Some(record(samples, &sggx, nonexp::fit(&samples.rays)))
 }
 
 /// The SGGX fit of a voxel's case-(a) normals ([`estimate`]); `None` without one.
@@ -121,7 +121,7 @@ pub fn estimate_samples(samples: &VoxelSamples) -> Option<SggxFit> {
 /// The record of a voxel from an SGGX fit and a \[VJK21\] fit already made (so a precompute
 /// that also builds the virtual mesh shares them): the matrix, the mean case-(a) albedo (0
 /// without case-(a) hits), σ and γ.
-pub fn record(samples: &VoxelSamples, sggx: &SggxFit, transmittance: vjk::VjkFit) -> SggxRecord {
+pub fn record(samples: &VoxelSamples, sggx: &SggxFit, transmittance: nonexp::VjkFit) -> SggxRecord {
     let (sum, n) = samples.surfaces().fold((Vec3::ZERO, 0u32), |(a, n), s| (a + s.albedo, n + 1));
     let color = if n > 0 { sum / n as f32 } else { Vec3::ZERO };
     SggxRecord::new(sggx.matrix(), color, transmittance.sigma(), transmittance.gamma())
@@ -262,7 +262,7 @@ mod tests {
     use voxlod_format::GridSpec;
 
     use super::*;
-    use crate::appearance::vjk::test_lines::plane;
+    use crate::appearance::nonexp::test_lines::plane;
     use crate::appearance::{Appearance, AppearanceGrid};
     use crate::random::rand_f32;
     use proptest::prelude::*;
@@ -425,7 +425,7 @@ mod tests {
             plane(4, 150, Vec3::new(0.2, 0.3, 1.0), Vec3::splat(0.5), Vec3::splat(0.6), false);
         let rec = fit(&samples).unwrap();
         let shared = estimate_samples(&samples).unwrap();
-        assert_eq!(record(&samples, &shared, vjk::fit(&samples.rays)), rec);
+        assert_eq!(record(&samples, &shared, nonexp::fit(&samples.rays)), rec);
         let s = rec.matrix();
         assert!(s.is_finite() && s.determinant() > 0.0, "{s}");
         assert_eq!((rec.density, rec.gamma), (255, 0), "a plane is an opaque surface");
@@ -440,7 +440,7 @@ mod tests {
             rays: back
                 .rays
                 .iter()
-                .map(|r| super::super::samples::RaySample { surface: None, ..*r })
+                .map(|r| super::super::voxel_samples::RaySample { surface: None, ..*r })
                 .collect(),
         };
         assert!(fit(&none).is_none());

@@ -29,8 +29,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec3A, Vec4};
 use voxlod_format::records::quant::unorm8;
 
-use super::sampler::{choose_face, chord, entry_point};
-use super::samples::VoxelSamples;
+use super::line_sampler::{choose_face, chord, entry_point};
+use super::voxel_samples::VoxelSamples;
 
 /// A line whose overlap with a sub-cell is no longer than this (voxel units) only touches it.
 pub const TOUCH: f32 = 1e-6;

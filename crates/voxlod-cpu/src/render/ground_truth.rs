@@ -24,30 +24,12 @@ use rayon::prelude::*;
 use voxlod_scene::camera::CameraFrame;
 use voxlod_scene::{Camera, Geometry, Image, Scene};
 
-use super::sampling::{Streams, stratified};
+use super::pixel_samples::{Streams, stratified};
+pub use super::surface::LightFilter;
 use super::surface::{Lighting, MeshTracer, SurfacePoint};
 use super::{check_colour, check_image_size};
 use crate::raycast::Bvh;
 use crate::{Error, Result};
-
-/// An extra transmittance toward the light, per shading point: what lies between a surface
-/// point and the light that the mesh's shadow ray does not see, such as a participating
-/// medium (the procedural volume's shadow on the scene, [`crate::volume::Volume`] implements
-/// it with [`crate::volume::Volume::transmittance_to_light`]).
-///
-/// Closures `Fn(Vec3) -> f32 + Sync` implement it.
-pub trait LightFilter: Sync {
-    /// Transmittance in [0, 1] of the light reaching world point `p` (1: unfiltered). The
-    /// renderer clamps it into [0, 1] and reads NaN as 0.
-    fn transmittance(&self, p: Vec3) -> f32;
-}
-
-impl<F: Fn(Vec3) -> f32 + Sync> LightFilter for F {
-    #[inline]
-    fn transmittance(&self, p: Vec3) -> f32 {
-        self(p)
-    }
-}
 
 /// Options of [`render`]. Cost is linear in `width · height · spp`, about doubled by shadows.
 #[derive(Clone, Copy)]

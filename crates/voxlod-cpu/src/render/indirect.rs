@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use voxlod_scene::{Geometry, Scene};
 
 use super::ground_truth::GBuffer;
-use super::sampling::Streams;
+use super::pixel_samples::Streams;
 use super::surface::{Lighting, MeshTracer};
 use crate::random::{rand_f32, rand_u32};
 use crate::raycast::{Bvh, offset_origin};

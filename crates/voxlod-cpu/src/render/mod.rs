@@ -6,7 +6,7 @@
 //!   triangles' average colour.
 //! - [`dda`]: the voxel walk every voxel renderer and voxel shadow ray uses, with
 //!   [`bricks`] for the brick look-ups it skips empty space with.
-//! - [`sampling`]: sub-pixel patterns and random streams.
+//! - [`pixel_samples`]: sub-pixel patterns and random streams.
 //! - [`indirect`]: ray-traced AO and one-bounce diffuse indirect light, the references of
 //!   voxel cone tracing.
 //!
@@ -21,7 +21,7 @@ pub mod filtered;
 pub mod ground_truth;
 pub mod indirect;
 pub(crate) mod lanes;
-pub mod sampling;
+pub mod pixel_samples;
 pub(crate) mod surface;
 
 #[cfg(test)]

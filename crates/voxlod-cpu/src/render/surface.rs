@@ -13,12 +13,30 @@
 use glam::Vec3;
 use voxlod_scene::{AlphaMode, Geometry, Light, MaterialSample, Scene};
 
-use super::ground_truth::LightFilter;
-use super::sampling::Streams;
+use super::pixel_samples::Streams;
 use crate::random::rand_f32;
 use crate::raycast::{Bvh, Hit, offset_origin};
 use crate::shading::shade;
 use crate::{Error, Result};
+
+/// An extra transmittance toward the light, per shading point: what lies between a surface
+/// point and the light that the mesh's shadow ray does not see, such as a participating
+/// medium (the procedural volume's shadow on the scene, [`crate::volume::Volume`] implements
+/// it with [`crate::volume::Volume::transmittance_to_light`]).
+///
+/// Closures `Fn(Vec3) -> f32 + Sync` implement it.
+pub trait LightFilter: Sync {
+    /// Transmittance in [0, 1] of the light reaching world point `p` (1: unfiltered). The
+    /// renderer clamps it into [0, 1] and reads NaN as 0.
+    fn transmittance(&self, p: Vec3) -> f32;
+}
+
+impl<F: Fn(Vec3) -> f32 + Sync> LightFilter for F {
+    #[inline]
+    fn transmittance(&self, p: Vec3) -> f32 {
+        self(p)
+    }
+}
 
 /// A surface point seen by a camera ray.
 #[derive(Clone, Copy, Debug)]

@@ -1,4 +1,4 @@
-//! Binning (seed 001 §5.5.1, Listing 5.1) and culling (§5.5).
+//! Binning (McNabb 2015, §5.5.1, Listing 5.1) and culling (§5.5).
 //!
 //! A particle goes into the bin of every metavoxel its **bounding sphere** (the outer radius)
 //! overlaps: the metavoxels of its bounding box are enumerated and each is kept when the

@@ -1,4 +1,4 @@
-//! Filling a metavoxel (seed 001 §5.5.2): every voxel centre is tested against the particles of
+//! Filling a metavoxel (McNabb 2015, §5.5.2): every voxel centre is tested against the particles of
 //! the metavoxel's bin, in particle order; a covered voxel adds the particle's extinction to its
 //! density (the sum) and raises its colour to the particle's colour there (the max, per
 //! channel; albedo and emission kept apart so that only the albedo is lit).

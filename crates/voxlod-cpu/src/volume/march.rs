@@ -1,4 +1,4 @@
-//! The eye-view ray march (seed 001 §5.5.4, Listing 5.3) in the metavoxel sort order of §5.5.5,
+//! The eye-view ray march (McNabb 2015, §5.5.4, Listing 5.3) in the metavoxel sort order of §5.5.5,
 //! the per-pixel checks it is measured against, and compositing over the mesh image.
 //!
 //! **Samples.** Eye rays are `eye + t · dir` with unit `dir` (`CameraFrame::ray_dir` through the

@@ -1,4 +1,4 @@
-//! Sparse procedural volumes with metavoxels: the CPU reference of seed 001 (McNabb, "Sparse
+//! Sparse procedural volumes with metavoxels: the CPU reference of McNabb's (2015, "Sparse
 //! Procedural Volume Rendering", GPU Pro), for displaced-sphere particles
 //! ([`voxlod_scene::particles`]).
 //!

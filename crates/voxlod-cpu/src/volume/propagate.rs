@@ -1,4 +1,4 @@
-//! Light propagation (seed 001 §5.5.3, Listing 5.2) and the shadows both ways (§5.3).
+//! Light propagation (McNabb 2015, §5.5.3, Listing 5.2) and the shadows both ways (§5.3).
 //!
 //! The volume is oriented to the light, so each voxel column is independent: per column the
 //! light starts at 1 at the volume's top, and each voxel, top to bottom, is lit with the light

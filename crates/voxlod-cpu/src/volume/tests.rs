@@ -1,4 +1,4 @@
-//! Tests of the metavoxel pipeline (issue 6): each rule against its brute-force or reference
+//! Tests of the metavoxel pipeline: each rule against its brute-force or reference
 //! counterpart, and the extremes. Volumes are tiny (a few metavoxels of 4³–8³ voxels).
 
 use glam::{Vec3, Vec4};
@@ -549,7 +549,7 @@ fn blob_over_ground(
 #[test]
 fn volume_shadow_darkens_the_mesh_by_exactly_its_transmittance() {
     use crate::render::ground_truth::{self, LightFilter, Options};
-    use crate::render::sampling::Streams;
+    use crate::render::pixel_samples::Streams;
     use crate::render::surface::{Lighting, MeshTracer};
     use crate::shading::shade;
     let to_light = LIGHT.normalize();

@@ -14,52 +14,11 @@ use voxlod_scene::Geometry;
 use super::TriangleRange;
 use super::lattice::{Lattice, Reach};
 use super::raster::for_each_voxel;
-use super::sort::bucket_sort;
+use super::sort::{Key, bucket_sort};
 use crate::{Error, Result};
 
 /// Triangles per parallel work item.
 const CHUNK: usize = 4096;
-
-/// A sort key packing a voxel's Morton code above a triangle id (`tri_bits` low bits), so that
-/// sorting keys groups pairs by voxel in Morton order, triangles ascending within a voxel.
-pub trait Key: Copy + Default + Ord + Send + Sync {
-    /// Packs a pair.
-    fn pack(code: u64, tri: u32, tri_bits: u32) -> Self;
-    /// The voxel's Morton code.
-    fn code(self, tri_bits: u32) -> u64;
-    /// The triangle id.
-    fn tri(self, tri_bits: u32) -> u32;
-}
-
-impl Key for u64 {
-    #[inline]
-    fn pack(code: u64, tri: u32, tri_bits: u32) -> Self {
-        code << tri_bits | tri as u64
-    }
-    #[inline]
-    fn code(self, tri_bits: u32) -> u64 {
-        self >> tri_bits
-    }
-    #[inline]
-    fn tri(self, tri_bits: u32) -> u32 {
-        (self & ((1u64 << tri_bits) - 1)) as u32
-    }
-}
-
-impl Key for u128 {
-    #[inline]
-    fn pack(code: u64, tri: u32, _: u32) -> Self {
-        (code as u128) << 32 | tri as u128
-    }
-    #[inline]
-    fn code(self, _: u32) -> u64 {
-        (self >> 32) as u64
-    }
-    #[inline]
-    fn tri(self, _: u32) -> u32 {
-        self as u32
-    }
-}
 
 /// Bits needed to hold values `0..count`.
 pub fn bits_for(count: u64) -> u32 {

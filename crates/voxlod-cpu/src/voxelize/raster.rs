@@ -167,7 +167,7 @@ impl<T: Wide> PlaneSpan<T> {
             (-m, m)
         } else {
             // n·VOXEL in `T`: |n| reaches 2^59 for triangles across the whole lattice, and
-            // n·VOXEL (2^67) does not fit an i64 (issue 4's equivalence suite found this).
+            // n·VOXEL (2^67) does not fit an i64 (the equivalence suite found this).
             let min = w(n.x.min(0), V) + w(n.y.min(0), V) + w(n.z.min(0), V);
             let max = w(n.x.max(0), V) + w(n.y.max(0), V) + w(n.z.max(0), V);
             if n.z > 0 { (min, max) } else { (-max, -min) }

@@ -14,7 +14,8 @@ use voxlod_scene::Geometry;
 
 use super::budget::{self, result_bytes};
 use super::lattice::{Lattice, Reach};
-use super::pairs::{self, BrickBits, Key, bits_for, code_bits};
+use super::pairs::{self, BrickBits, bits_for, code_bits};
+use super::sort::Key;
 use super::{Mode, Options, TriangleRange, Voxelization};
 use crate::Result;
 

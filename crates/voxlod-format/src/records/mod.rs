@@ -1,4 +1,4 @@
-//! Per-voxel appearance records of the filtered representations (HPG 2023 paper, seed 000),
+//! Per-voxel appearance records of the filtered representations (Brito, Poulin and Teichrieb, HPG 2023),
 //! frozen `#[repr(C)]` `Pod` layouts that the GPU mirrors field for field. All fields are bytes
 //! (or one `u32`), so a record has no padding the compiler chooses and no alignment above 4.
 //!

@@ -1,7 +1,7 @@
 //! Kernel 4 (first part): the filtered voxel renderer for **Averages** and **\[VJK21\]**
 //! (SGGX) records on the GPU, the mirror of [`voxlod_cpu::render::filtered::render`] over an
 //! [`AppearanceGrid`] of [`AverageRecord`] or [`SggxRecord`]: 4 camera rays per pixel through
-//! [`PATTERN_4`](voxlod_cpu::render::sampling::PATTERN_4), each walking the grid with the DDA
+//! [`PATTERN_4`](voxlod_cpu::render::pixel_samples::PATTERN_4), each walking the grid with the DDA
 //! of [`voxlod_cpu::render::dda`] (ported line by line: the same plane expression, tie rule and
 //! clipping), compositing the voxels with a record front to back until `T < 0.001` with
 //! `Opacity::apply` (alpha for Averages; for \[VJK21\] the non-exponential update of
@@ -194,7 +194,7 @@ pub enum RecordKind {
     /// [`BaselineVoxel`]: opaque cubes of one colour, the baseline renderer
     /// ([`voxlod_cpu::render::baseline`]).
     Baseline = 2,
-    /// [`VirtualMeshGrid`](voxlod_cpu::appearance::vmesh::VirtualMeshGrid): virtual mesh +
+    /// [`VirtualMeshGrid`](voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid): virtual mesh +
     /// opacity subgrid, rendered by the per-voxel passes of [`voxels`].
     VirtualMesh = 3,
     /// [`AdaptiveGrid`](voxlod_cpu::appearance::adaptive::AdaptiveGrid): each voxel one of

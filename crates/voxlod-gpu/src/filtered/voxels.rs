@@ -3,10 +3,10 @@
 //! \[VJK21\] or virtual-mesh record), the mirror of [`voxlod_cpu::render::filtered::render`]
 //! over them: the same camera rays, DDA, compositing, shadow rays and shading as the first
 //! part (see [the parent module](super)), with `vmesh.wgsl` porting
-//! [`voxlod_cpu::appearance::vmesh::shade_record`] (the projected-area-weighted faces, the
+//! [`voxlod_cpu::appearance::virtual_mesh::shade_record`] (the projected-area-weighted faces, the
 //! fixed Hammersley barycentric samples of distribution faces, the fallback) and
 //! [`voxlod_cpu::appearance::subgrid::directional_opacity`] (both rules, Lines and Circles),
-//! times [`projected_area_ratio`](voxlod_cpu::appearance::vmesh::projected_area_ratio) when
+//! times [`projected_area_ratio`](voxlod_cpu::appearance::virtual_mesh::projected_area_ratio) when
 //! [`VirtualMeshParams::projected_area`] is on. No random numbers are drawn: the CPU's
 //! virtual-mesh shading samples fixed barycentric points (`barycentric_point`) and its Lines
 //! rule a fixed pattern, so both backends evaluate the same points in the same order.
@@ -59,7 +59,7 @@
 use glam::Vec3;
 use voxlod_cpu::appearance::adaptive::AdaptiveGrid;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::vmesh::{VirtualMeshGrid, VirtualMeshParams};
+use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
 use voxlod_cpu::appearance::{AppearanceGrid, record_material};
 use voxlod_cpu::render::filtered::FrameCache;
 use voxlod_format::records::quant::srgb_to_linear_table;

@@ -48,7 +48,7 @@ use voxlod_cpu::raycast::Bvh;
 use voxlod_cpu::render::ground_truth::{
     GBuffer, GTexel, GroundTruth, Options, check_options, validate,
 };
-use voxlod_cpu::render::sampling::Streams;
+use voxlod_cpu::render::pixel_samples::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
 use crate::material::{MaterialBuffers, gpu_materials};

@@ -1,5 +1,5 @@
 //! The sparse voxel octree build on the GPU: the lock-free level-by-level build of
-//! [`voxlod_octree::flat`] (seed 002 §4.3–4.4 without the paper's spin lock) as wgpu kernels,
+//! [`voxlod_octree::gpu_layout`] (seed 002 §4.3–4.4 without the paper's spin lock) as wgpu kernels,
 //! producing the flat layout [`FlatOctree`] (nodes of all levels root first, 2×2×2 tiles with
 //! +x/+y/+z links on the sparse levels) and the bottom-up Averages pre-filter.
 //!

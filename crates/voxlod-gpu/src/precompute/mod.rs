@@ -1,5 +1,5 @@
 //! Kernel 6: the per-voxel appearance precompute on the GPU, the mirror of voxlod-cpu's ray
-//! sampler ([`voxlod_cpu::appearance::sampler`]), opacity subgrid
+//! sampler ([`voxlod_cpu::appearance::line_sampler`]), opacity subgrid
 //! ([`voxlod_cpu::appearance::subgrid::build`]) and Averages fit
 //! ([`voxlod_cpu::appearance::averages::fit`]), driven like
 //! [`voxlod_cpu::appearance::precompute::precompute`].
@@ -93,9 +93,9 @@
 use glam::{DVec3, Vec3};
 use voxlod_cpu::appearance::AppearanceGrid;
 use voxlod_cpu::appearance::eigen::symmetric_eigen;
+use voxlod_cpu::appearance::line_sampler::{SamplingContext, blend_key, dimension_base};
 use voxlod_cpu::appearance::precompute::PrecomputeOptions;
-use voxlod_cpu::appearance::sampler::{SamplingContext, blend_key, dimension_base};
-use voxlod_cpu::appearance::samples::{RaySample, SurfaceSample, VoxelSamples};
+use voxlod_cpu::appearance::voxel_samples::{RaySample, SurfaceSample, VoxelSamples};
 use voxlod_cpu::voxelize::Voxelization;
 use voxlod_format::records::{AverageRecord, SpecularRecord};
 use voxlod_format::{BrickMap, morton};

@@ -30,8 +30,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use glam::Vec3;
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
 use voxlod_cpu::appearance::{Appearance, AppearanceGrid, averages, sggx};
 use voxlod_cpu::render::baseline::{self, BaselineVoxel};
 use voxlod_cpu::render::filtered::{FrameCache, Options, render, render_uncached};

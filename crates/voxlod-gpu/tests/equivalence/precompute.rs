@@ -1,7 +1,7 @@
 //! Kernel 6, the per-voxel appearance precompute (ray sampling, Averages, opacity subgrid).
 //!
 //! Oracle, shared by both backends: an independent `f64` sampler written here — the lines of
-//! `voxlod_cpu::appearance::sampler::sample_line` (the random-number contract, exact), each
+//! `voxlod_cpu::appearance::line_sampler::sample_line` (the random-number contract, exact), each
 //! intersected with the voxel's triangles by Möller–Trumbore in `f64` on voxel-local `f64`
 //! vertices, the sampler's rules for cases (closed voxel box with the axis-aligned snap, which
 //! the sampler defines on the `f32`-rounded local vertices, so the oracle does too,
@@ -54,9 +54,11 @@ use std::collections::HashMap;
 use std::rc::Rc;
 
 use glam::{DVec3, UVec3, Vec2, Vec3, Vec4};
+use voxlod_cpu::appearance::line_sampler::{
+    SamplingContext, blend_key, dimension_base, sample_line,
+};
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::{SamplingContext, blend_key, dimension_base, sample_line};
-use voxlod_cpu::appearance::samples::{RaySample, SurfaceSample, VoxelSamples};
+use voxlod_cpu::appearance::voxel_samples::{RaySample, SurfaceSample, VoxelSamples};
 use voxlod_cpu::appearance::{AppearanceGrid, averages, subgrid};
 use voxlod_cpu::random::rand_f32;
 use voxlod_cpu::voxelize::{Options, Voxelization, voxelize};

@@ -6,7 +6,7 @@
 //! whose four words (`pcg3d` × 3, `rand_f32` bits) differ; bound 0.
 
 use voxlod_cpu::random::{pcg3d, rand_f32};
-use voxlod_cpu::render::sampling::Streams;
+use voxlod_cpu::render::pixel_samples::Streams;
 use voxlod_gpu::random::RandomKernel;
 
 use crate::harness::{Backend, Measure};

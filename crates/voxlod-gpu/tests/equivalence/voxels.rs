@@ -32,10 +32,10 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 use voxlod_cpu::appearance::adaptive::{AdaptiveGrid, AdaptiveOptions, Candidates};
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::vmesh::{self, VirtualMeshGrid};
+use voxlod_cpu::appearance::virtual_mesh::{self, VirtualMeshGrid};
 use voxlod_cpu::appearance::{Appearance, AppearanceGrid};
 use voxlod_cpu::render::filtered::{FrameCache, Options, render, render_uncached};
 use voxlod_cpu::voxelize::{self, voxelize};
@@ -81,7 +81,7 @@ fn fixture() -> &'static Fixture {
         let ctx = SamplingContext::new(&scene, &geometry, &vox).expect("a sampling context");
         let opts = PrecomputeOptions { rays: 32, seed: 0 };
         let records: AppearanceGrid<VirtualMeshRecord> =
-            precompute(&ctx, &opts, vmesh::fit).expect("virtual mesh");
+            precompute(&ctx, &opts, virtual_mesh::fit).expect("virtual mesh");
         let mut vmesh = VARIANTS.map(|(_, rule, projected_area)| VirtualMeshGrid {
             rule,
             projected_area,

@@ -1,4 +1,4 @@
-//! [`DisplacementMap`]: a cube map of 3D fractal noise sampled on the unit sphere (seed 001,
+//! [`DisplacementMap`]: a cube map of 3D fractal noise sampled on the unit sphere (McNabb 2015,
 //! Figure 5.8), so that a fill reads one bilinear texel look-up per voxel instead of evaluating
 //! 3D noise.
 //!

@@ -1,4 +1,4 @@
-//! Volume primitives for procedural participating media (seed 001, McNabb, "Sparse Procedural
+//! Volume primitives for procedural participating media (McNabb 2015, "Sparse Procedural
 //! Volume Rendering", §5.5.2): the **displaced sphere**.
 //!
 //! A [`Particle`] is a sphere of inner radius `radius` whose surface is pushed radially outward

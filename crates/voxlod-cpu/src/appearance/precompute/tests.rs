@@ -84,13 +84,13 @@ proptest! {
 /// direction (an isotropic SGGX) keeps ≥ 0.99 of its subgrid opacity from every direction.
 #[test]
 fn projected_area_makes_a_plane_transparent_edge_on() {
-    use crate::appearance::vmesh::{self, VirtualMeshGrid, projected_area_ratio};
+    use crate::appearance::virtual_mesh::{self, VirtualMeshGrid, projected_area_ratio};
     for axis in 0..3 {
         let sc = plane(axis, 0.45, false, false);
         let (g, v) = prepare(&sc, 4);
         let ctx = SamplingContext::new(&sc, &g, &v).unwrap();
         let opts = PrecomputeOptions { rays: 600, seed: 3 };
-        let grid = precompute(&ctx, &opts, vmesh::fit).unwrap();
+        let grid = precompute(&ctx, &opts, virtual_mesh::fit).unwrap();
         let plain = VirtualMeshGrid::new(grid.clone());
         let scaled = VirtualMeshGrid { projected_area: true, ..VirtualMeshGrid::new(grid) };
         let i = scaled.index_of(UVec3::ONE).expect("the crossed voxel has a record");
@@ -198,7 +198,7 @@ fn specular_side_records_only_for_specular_scenes() {
     let mut samples = VoxelSamples::default();
     ctx.sample_voxel(0, 0, 1, &mut samples);
     let mut ray = samples.rays[0];
-    let surface = |specular, shininess| crate::appearance::samples::SurfaceSample {
+    let surface = |specular, shininess| crate::appearance::voxel_samples::SurfaceSample {
         point: Vec3::splat(0.5),
         normal: Vec3::Z,
         albedo: Vec3::ONE,

@@ -4,8 +4,8 @@ use glam::Vec3;
 use proptest::prelude::*;
 
 use super::*;
-use crate::appearance::sampler::sample_line;
-use crate::appearance::samples::{RaySample, SurfaceSample};
+use crate::appearance::line_sampler::sample_line;
+use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
 
 const RULES: [DirectionalRule; 2] = [DirectionalRule::Lines, DirectionalRule::Circles];
 

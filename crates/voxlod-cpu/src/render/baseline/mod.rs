@@ -33,7 +33,7 @@ use voxlod_scene::{Camera, Image, Light, MaterialSample};
 
 use super::bricks::{BrickLookup, DenseBricks, voxel_index};
 use super::dda::Dda;
-use super::sampling::PATTERN_4;
+use super::pixel_samples::PATTERN_4;
 use super::{check_colour, check_image_size};
 use crate::shading::shade;
 use crate::{Error, Result};

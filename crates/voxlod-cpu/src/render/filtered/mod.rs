@@ -64,7 +64,7 @@ use voxlod_scene::{Camera, Image, Light};
 
 use super::bricks::BrickLookup;
 use super::dda::{Dda, DdaVoxel};
-use super::sampling::PATTERN_4;
+use super::pixel_samples::PATTERN_4;
 use super::{check_colour, check_image_size};
 use crate::appearance::{Appearance, Opacity};
 use crate::{Error, Result};

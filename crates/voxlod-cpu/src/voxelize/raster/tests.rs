@@ -134,7 +134,7 @@ fn huge_triangles_take_the_wide_path_and_match_the_reference() {
     }
 }
 
-/// Issue 4: the equivalence suite found `PlaneSpan::new` computing `n·VOXEL` in `i64`, which
+/// The equivalence suite found `PlaneSpan::new` computing `n·VOXEL` in `i64`, which
 /// overflows for triangles over ~2^19 voxels across (`|n| > 2^55`): a panic with overflow
 /// checks, wrong voxels without. Triangles reaching the lattice's limit (`±COORD_LIMIT`, 2^21
 /// voxels) through a small grid must match the per-voxel reference (`i128`).

@@ -48,9 +48,9 @@ use voxlod_format::records::{SCALE_RANGE, SpecularRecord, VirtualMeshRecord};
 use voxlod_scene::{LightSample, MaterialSample};
 
 use super::RecordAppearance;
-use super::samples::VoxelSamples;
 use super::sggx::{self, radical_inverse2};
 use super::subgrid::{self, DirectionalRule};
+use super::voxel_samples::VoxelSamples;
 use super::{Appearance, AppearanceGrid, Opacity};
 use crate::shading::shade;
 
@@ -443,8 +443,8 @@ mod tests {
     use std::f32::consts::PI;
 
     use super::*;
-    use crate::appearance::samples::{RaySample, SurfaceSample};
-    use crate::appearance::vjk::test_lines::plane;
+    use crate::appearance::nonexp::test_lines::plane;
+    use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
     use crate::random::rand_f32;
     use proptest::prelude::*;
     use voxlod_format::BrickMap;

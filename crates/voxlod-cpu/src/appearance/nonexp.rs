@@ -31,7 +31,7 @@
 use voxlod_format::records::SIGMA_RANGE;
 use voxlod_format::records::quant::from_unorm8;
 
-use super::samples::RaySample;
+use super::voxel_samples::RaySample;
 
 /// Number of chord-length bins of the coarse pass, uniform in `∛(ℓ/√3)` over `[0, √3]`.
 pub const CHORD_BINS: usize = 32;
@@ -392,7 +392,7 @@ fn all_blocked(rays: &[RaySample]) -> Option<VjkFit> {
 pub(crate) mod test_lines {
     use glam::Vec3;
 
-    use super::super::samples::{RaySample, SurfaceSample, VoxelSamples};
+    use super::super::voxel_samples::{RaySample, SurfaceSample, VoxelSamples};
     use crate::random::rand_f32;
 
     /// Line `i` of voxel `id`: a uniform direction, then a uniform point over the voxel's

@@ -18,7 +18,7 @@
 //! `struct GpuLevel { first: u32, count: u32, res_log2: u32, dense: u32, first_tile: u32 }`
 //! (20 bytes).
 //!
-//! # The lock-free build (seed 002's Algorithm 1 without its spin lock)
+//! # The lock-free build (Yalçıner and Sahillioğlu's (2020) Algorithm 1 without its spin lock)
 //! WGSL has relaxed atomics only and no forward-progress guarantee, so the paper's top-down
 //! allocation (compare-and-swap, spin while another thread allocates, volatile write) cannot be
 //! ported. Instead, from the dense levels down, for each sparse level `l`:
@@ -164,7 +164,7 @@ impl<P: Payload> FlatOctree<P> {
             return None;
         }
         if lv.dense == 1 {
-            let next = crate::build::morton_inc(local as u64, axis, lv.res_log2)?;
+            let next = voxlod_format::morton::step_up(local as u64, axis, lv.res_log2)?;
             return Some(lv.first + next as u32);
         }
         let bit = 1u32 << axis;
@@ -184,7 +184,7 @@ impl<P: Payload> FlatOctree<P> {
     ) -> Result<Self> {
         // Input checks and the level plan are host work, shared with the reference.
         grid.validate()?;
-        let (depth, first_dense) = crate::build::plan(grid.dims, options)?;
+        let (depth, first_dense) = crate::input::plan(grid.dims, options)?;
         let mut seen: Vec<(u64, usize)> =
             voxels.iter().enumerate().map(|(i, (c, _))| (morton::encode(*c), i)).collect();
         for (c, p) in voxels {

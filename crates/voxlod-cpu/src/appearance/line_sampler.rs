@@ -53,7 +53,7 @@ use glam::{UVec3, Vec3};
 use voxlod_format::GridSpec;
 use voxlod_scene::{AlphaMode, Geometry, Scene};
 
-use super::samples::{RaySample, SurfaceSample, VoxelSamples};
+use super::voxel_samples::{RaySample, SurfaceSample, VoxelSamples};
 use crate::random::rand_f32;
 use crate::voxelize::Voxelization;
 use crate::{Error, Result};
