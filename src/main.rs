@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 #[global_allocator]
-static ALLOC: voxlod::alloc::TrackingAllocator = voxlod::alloc::TrackingAllocator;
+static ALLOC: voxlod::studies::alloc::TrackingAllocator = voxlod::studies::alloc::TrackingAllocator;
 
 fn main() -> ExitCode {
     let cli = cli::Cli::parse();

@@ -127,14 +127,14 @@ pub struct RenderArgs {
     #[arg(long)]
     pub camera: Option<String>,
     /// Light `dir=X,Y,Z[;irradiance=E]` (toward the light) or `point=X,Y,Z[;intensity=I]`.
-    #[arg(long)]
-    pub light: Option<String>,
+    #[arg(long, value_parser = parse::light_arg)]
+    pub light: Option<voxlod::scene::Light>,
     /// Rays per pixel.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
     /// Image size WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
+    #[arg(long, default_value = "512x512", value_parser = parse::size_arg)]
+    pub size: (u32, u32),
     /// Seed of the pixel sampling pattern.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
@@ -158,23 +158,25 @@ pub struct RenderArgs {
 pub struct CompareSceneArgs {
     /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
     pub scene: String,
-    /// Voxel resolutions (voxels along the longest axis), comma-separated.
-    #[arg(long, default_value = "128,256", value_delimiter = ',')]
+    /// Voxel resolutions (voxels along the longest axis, 1..=4096), comma-separated.
+    #[arg(long, default_value = "128,256", value_delimiter = ',', num_args = 1..,
+          value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub res: Vec<u32>,
     /// The higher image side rendered besides the one equal to each resolution (0: none).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(0..=8192))]
     pub image: u32,
     /// Rays per pixel of the ground truth.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
     /// Viewpoints (the scene's camera orbited about the vertical axis).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = parse::at_least_one)]
     pub views: usize,
     /// Sampling rays per voxel.
-    #[arg(long, default_value_t = 150)]
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
     pub rays: u32,
-    /// Adaptive thresholds, comma-separated.
-    #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',')]
+    /// Adaptive thresholds (finite, ≥ 0), comma-separated.
+    #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',',
+          value_parser = parse::non_negative_f32)]
     pub thresholds: Vec<f32>,
     /// Where to render the images that have a GPU kernel (gpu: the ground truth — every
     /// material, textures and alpha included —, the baseline, Averages and [VJK21], the virtual
@@ -194,20 +196,24 @@ pub struct CompareSceneArgs {
 pub struct ConeArgs {
     /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
     pub scene: String,
-    /// Voxel resolutions (voxels along the longest axis; octree depth = log2), comma-separated.
-    #[arg(long, default_value = "32,64", value_delimiter = ',')]
+    /// Voxel resolutions (voxels along the longest axis, powers of two in 4..=1024; octree
+    /// depth = log2), comma-separated.
+    #[arg(long, default_value = "32,64", value_delimiter = ',', value_parser = parse::octree_resolution)]
     pub res: Vec<u32>,
-    /// Diffuse cone counts, comma-separated.
-    #[arg(long, default_value = "1,6,16", value_delimiter = ',')]
+    /// Diffuse cone counts (1..=1024), comma-separated.
+    #[arg(long, default_value = "1,6,16", value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub cones: Vec<u32>,
-    /// Full cone apertures in degrees, comma-separated.
-    #[arg(long, default_value = "15,30,60", value_delimiter = ',')]
+    /// Full cone apertures in degrees, in [0, 180), comma-separated.
+    #[arg(long, default_value = "15,30,60", value_delimiter = ',',
+          value_parser = parse::f32_in(0.0, 180.0, true))]
     pub apertures: Vec<f32>,
-    /// Step lengths as fractions of the cone diameter, comma-separated.
-    #[arg(long, default_value = "0.5,1", value_delimiter = ',')]
+    /// Step lengths as fractions of the cone diameter, in [0.05, 4], comma-separated.
+    #[arg(long, default_value = "0.5,1", value_delimiter = ',',
+          value_parser = parse::f32_in(0.05, 4.0, false))]
     pub steps: Vec<f32>,
-    /// Image side in pixels.
-    #[arg(long, default_value_t = 64)]
+    /// Image side in pixels (1..=2048).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=2048))]
     pub size: u32,
     /// Where the cones of the sweep are traced: cpu (rayon, the reference) or gpu (the wgpu
     /// kernel, on the adapter `VOXLOD_ADAPTER` selects; no adapter is an error). The G-buffer,
@@ -215,33 +221,34 @@ pub struct ConeArgs {
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
     /// Rays per pixel of the ray-traced references.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
-    /// AO radius as a fraction of the scene's bounding-box diagonal.
-    #[arg(long, default_value_t = 0.1)]
+    /// AO radius as a fraction of the scene's bounding-box diagonal (finite, > 0).
+    #[arg(long, default_value_t = 0.1, value_parser = parse::positive_f32)]
     pub ao_radius: f32,
     /// Primary visibility with level of detail by distance: the scene rendered by one
     /// pixel-wide cone per pixel through its Averages octree ("none" skips it).
     #[arg(long, default_value = "builtin:forest")]
     pub lod_scene: String,
     /// Voxels along the longest axis of the LOD scene's octree (a power of two, 4..=1024).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = parse::octree_resolution)]
     pub lod_res: u32,
-    /// Image side of the LOD renders, pixels.
-    #[arg(long, default_value_t = 128)]
+    /// Image side of the LOD renders, pixels (1..=2048).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=2048))]
     pub lod_size: u32,
-    /// LOD biases (footprint multipliers; 0 = always the finest level, the reference march),
-    /// comma-separated.
-    #[arg(long, default_value = "0,0.5,1,2,4", value_delimiter = ',')]
+    /// LOD biases (footprint multipliers in [0, 64]; 0 = always the finest level, the
+    /// reference march), comma-separated.
+    #[arg(long, default_value = "0,0.5,1,2,4", value_delimiter = ',',
+          value_parser = parse::f32_in(0.0, 64.0, false))]
     pub lod_bias: Vec<f32>,
-    /// Step of the LOD march as a fraction of the footprint diameter.
-    #[arg(long, default_value_t = 0.5)]
+    /// Step of the LOD march as a fraction of the footprint diameter, in [0.05, 4].
+    #[arg(long, default_value_t = 0.5, value_parser = parse::f32_in(0.05, 4.0, false))]
     pub lod_step: f32,
     /// Moves the LOD scene's default camera away from its target by this factor (> 0).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse::positive_f32)]
     pub lod_zoom_out: f32,
     /// Rays per pixel of the LOD scene's ground-truth mesh render.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub lod_spp: u32,
     /// Output directory.
     #[arg(short, long, default_value = "out/cone")]
@@ -255,6 +262,7 @@ pub struct ConeArgs {
 #[derive(Debug, Args)]
 pub struct VolumeArgs {
     /// Preset: smoke, explosion or clouds.
+    #[arg(value_parser = clap::builder::PossibleValuesParser::new(voxlod::studies::volume::PRESETS))]
     pub preset: String,
     /// Particles (0: the preset's default: smoke 10000, explosion 4000, clouds 3000).
     #[arg(long, default_value_t = 0)]
@@ -262,14 +270,15 @@ pub struct VolumeArgs {
     /// Voxels per axis of the volume; every metavoxel size must divide it.
     #[arg(long, default_value_t = 128)]
     pub res: u32,
-    /// Metavoxel sizes M measured, comma-separated.
-    #[arg(long, default_value = "8,16,32,64", value_delimiter = ',')]
+    /// Metavoxel sizes M measured (≥ 1), comma-separated.
+    #[arg(long, default_value = "8,16,32,64", value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(1..))]
     pub m: Vec<u32>,
-    /// Image side in pixels.
-    #[arg(long, default_value_t = 256)]
+    /// Image side in pixels (1..=4096).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub image: u32,
     /// Rays per pixel of the mesh's ground truth.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
     /// Where to build and march the volume (gpu: the four voxlod-gpu volume kernels, equal to
     /// the CPU within the equivalence suite's bounds; the mesh's ground truth stays on the

@@ -1,9 +1,74 @@
-//! Parsers for command-line values: vectors `x,y,z`, sizes `WxH`, cameras and lights given as
-//! `key=value;key=value` lists. Each error names the value and the expected form.
+//! Parsers for command-line values, used as clap `value_parser`s so that a bad value is
+//! refused with the flag's name before a command runs: numbers in ranges, powers of two,
+//! vectors `x,y,z`, sizes `WxH`, cameras and lights given as `key=value;key=value` lists. Each
+//! error names the value and the expected form.
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 use voxlod::scene::{Camera, Light};
+
+/// A parser of `f32` values in `[lo, hi]` (`hi` excluded when `open_hi`); NaN and infinities
+/// are refused.
+pub fn f32_in(
+    lo: f32,
+    hi: f32,
+    open_hi: bool,
+) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let v: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+        let inside = v >= lo && if open_hi { v < hi } else { v <= hi };
+        if !v.is_finite() || !inside {
+            let close = if open_hi { ')' } else { ']' };
+            return Err(format!("{v} is not in [{lo}, {hi}{close}"));
+        }
+        Ok(v)
+    }
+}
+
+/// A finite `f32` greater than zero.
+pub fn positive_f32(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("{v} is not finite and > 0"));
+    }
+    Ok(v)
+}
+
+/// A finite `f32` at least zero.
+pub fn non_negative_f32(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if !(v.is_finite() && v >= 0.0) {
+        return Err(format!("{v} is not a finite non-negative number"));
+    }
+    Ok(v)
+}
+
+/// A power of two in 4..=1024 (an octree resolution).
+pub fn octree_resolution(s: &str) -> Result<u32, String> {
+    let v: u32 = s.trim().parse().map_err(|_| format!("'{s}' is not a whole number"))?;
+    if !(v.is_power_of_two() && (4..=1024).contains(&v)) {
+        return Err(format!("{v} is not a power of two in 4..=1024"));
+    }
+    Ok(v)
+}
+
+/// A whole number at least 1 (`usize`).
+pub fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if v >= 1 => Ok(v),
+        _ => Err(format!("'{s}' is not a whole number ≥ 1")),
+    }
+}
+
+/// An image size `WxH` for clap (see [`size`]).
+pub fn size_arg(s: &str) -> Result<(u32, u32), String> {
+    size(s).map_err(|e| format!("{e:#}"))
+}
+
+/// A light for clap (see [`light`]).
+pub fn light_arg(s: &str) -> Result<Light, String> {
+    light(s).map_err(|e| format!("{e:#}"))
+}
 
 /// Parses `x,y,z`.
 pub fn vec3(s: &str) -> Result<Vec3> {

@@ -2,8 +2,9 @@
 
 use std::time::Duration;
 
-use anyhow::{Context, Result, ensure};
-use voxlod::experiment::{self, Backend, Config, FilteredConfig, SceneCase};
+use anyhow::{Context, Result};
+use voxlod::studies::filtered::FilteredConfig;
+use voxlod::studies::report::{self, Config, SceneCase};
 
 use super::{Ui, backend, print_json};
 use crate::cli::CompareSceneArgs;
@@ -11,16 +12,6 @@ use crate::cli::CompareSceneArgs;
 /// Runs the comparison, writes `<output>/report.md` (+ images, plots, JSON) and prints the
 /// tables.
 pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
-    ensure!(!args.res.is_empty(), "--res needs at least one resolution");
-    for &r in &args.res {
-        ensure!((1..=4096).contains(&r), "--res {r} is out of range 1..=4096");
-    }
-    ensure!(args.spp > 0, "--spp must be at least 1");
-    ensure!(args.views > 0, "--views must be at least 1");
-    ensure!(args.rays > 0, "--rays must be at least 1");
-    for &t in &args.thresholds {
-        ensure!(t.is_finite() && t >= 0.0, "--thresholds: {t} is not a finite non-negative number");
-    }
     let filtered = FilteredConfig {
         resolutions: args.res.clone(),
         higher_image: (args.image > 0).then_some(args.image),
@@ -37,14 +28,16 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         section_budget: Duration::MAX,
         filtered: Some(filtered),
         volume: None,
+        cone: None,
+        command: super::invocation(),
         ..Config::quick()
     };
     // No adapter is an error, never a fall-back to the CPU.
-    let (gpu, backend_name) = backend(args.backend)?;
-    let on = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let gpu = backend(args.backend)?;
+    let on = super::on(&gpu);
     let spinner = ui.spinner();
     let progress = |msg: &str| spinner.set_message(msg.to_string());
-    let outcome = experiment::run_on(&config, on, &progress)
+    let outcome = report::run(&config, on, &progress)
         .with_context(|| format!("comparing representations of '{}'", args.scene))?;
     let written = outcome
         .report
@@ -52,11 +45,11 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         .with_context(|| format!("writing the report into {}", args.output.display()))?;
     spinner.finish_and_clear();
     if args.json {
-        return print_json(&outcome.scenes);
+        return print_json("compare", &outcome.scenes);
     }
     if gpu.is_some() {
         // The CPU run prints what it always did; a GPU run says which adapter rendered what.
-        println!("backend: {backend_name}");
+        println!("backend: {}", on.describe());
         println!(
             "(ground truth and every representation rendered on the GPU, Averages also \
              precomputed there: see each row's backend and 'precompute on')"

@@ -72,7 +72,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
         ),
     };
     if args.json {
-        return print_json(&value);
+        return print_json("info", &value);
     }
     println!("{}", path.display());
     if let Some(map) = value.as_object() {

@@ -3,7 +3,6 @@
 
 mod compare;
 mod cone;
-mod cone_primary;
 mod info;
 mod render;
 mod report;
@@ -24,20 +23,34 @@ pub use report::report;
 pub use volume::volume;
 pub use voxelize::voxelize;
 
+use voxlod::studies::backend::Backend;
+
 use crate::cli::{BackendArg, CompareArgs};
 
-/// The GPU context for `--backend gpu` (an error if there is no adapter: never a fall-back),
-/// and the line naming the backend that every command prints.
-fn backend(choice: BackendArg) -> Result<(Option<voxlod::gpu::Context>, String)> {
+/// The GPU context for `--backend gpu` (an error if there is no adapter: never a fall-back).
+fn backend(choice: BackendArg) -> Result<Option<voxlod::gpu::Context>> {
     match choice {
-        BackendArg::Cpu => Ok((None, "cpu (rayon)".into())),
+        BackendArg::Cpu => Ok(None),
         BackendArg::Gpu => {
-            let ctx = voxlod::gpu::Context::new().context("opening the GPU backend")?;
-            // The summary says when the adapter is a CPU implementation (CPU timings).
-            let name = format!("gpu: {}", ctx.summary());
-            Ok((Some(ctx), name))
+            Ok(Some(voxlod::gpu::Context::new().context("opening the GPU backend")?))
         }
     }
+}
+
+/// How to run this invocation again from the repository: `cargo run --release` and this
+/// process's arguments (named at the top of the reports).
+fn invocation() -> String {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.is_empty() {
+        "cargo run --release".into()
+    } else {
+        format!("cargo run --release -- {}", args.join(" "))
+    }
+}
+
+/// The studies' backend for an opened context (or none).
+fn on(gpu: &Option<voxlod::gpu::Context>) -> Backend<'_> {
+    gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu)
 }
 
 /// How to talk to the user.
@@ -64,12 +77,24 @@ impl Ui {
 
 /// Loads a scene spec, naming it in the error.
 pub fn load_scene(spec: &str) -> Result<voxlod::scene::Scene> {
-    voxlod::scenes::load(spec).with_context(|| format!("loading scene '{spec}'"))
+    voxlod::studies::scenes::load(spec).with_context(|| format!("loading scene '{spec}'"))
 }
 
-/// Prints `value` as pretty JSON on stdout.
-pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
-    println!("{}", serde_json::to_string_pretty(value)?);
+/// The version of every `--json` output's layout (docs/json.md): raised whenever a field is
+/// renamed, removed or changes meaning.
+pub const JSON_SCHEMA_VERSION: u32 = 1;
+
+/// Prints `result` as pretty JSON on stdout, in the envelope every `--json` output shares:
+/// `{"schema_version": …, "command": …, "result": …}` (docs/json.md).
+pub fn print_json(command: &str, result: &impl serde::Serialize) -> Result<()> {
+    #[derive(serde::Serialize)]
+    struct Envelope<'a, T> {
+        schema_version: u32,
+        command: &'a str,
+        result: &'a T,
+    }
+    let out = Envelope { schema_version: JSON_SCHEMA_VERSION, command, result };
+    println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
 }
 
@@ -82,7 +107,7 @@ pub fn compare_images(args: CompareArgs) -> Result<()> {
     let m = voxlod::eval::compare(&b, &a)
         .with_context(|| format!("comparing {} with {}", args.b.display(), args.a.display()))?;
     if args.json {
-        return print_json(&m);
+        return print_json("compare-images", &m);
     }
     println!("reference  {}", args.a.display());
     println!("test       {}", args.b.display());
@@ -95,7 +120,7 @@ pub fn compare_images(args: CompareArgs) -> Result<()> {
 /// `voxlod scenes`.
 pub fn scenes() -> Result<()> {
     println!("Builtin scenes (use as builtin:NAME or builtin:NAME?KEY=VALUE&KEY=VALUE):\n");
-    for (name, description) in voxlod::scenes::builtin_names() {
+    for (name, description) in voxlod::studies::scenes::builtin_names() {
         println!("  {name:<14} {description}");
         if let Ok(params) = voxlod::scene::procedural::builtin_params(name) {
             for p in params {

@@ -29,8 +29,9 @@ struct Summary {
 
 /// Renders the ground truth of a scene.
 pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
-    let (width, height) = parse::size(&args.size)?;
-    let (gpu, backend_name) = backend(args.backend)?;
+    let (width, height) = args.size;
+    let gpu = backend(args.backend)?;
+    let backend_name = super::on(&gpu).describe();
     let spinner = ui.spinner();
     spinner.set_message(format!("loading {}", args.scene));
     let mut scene = load_scene(&args.scene)?;
@@ -38,8 +39,8 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         Some(s) => parse::camera(s, scene.default_camera()?)?,
         None => scene.default_camera()?,
     };
-    if let Some(s) = &args.light {
-        scene.lights = vec![parse::light(s)?];
+    if let Some(light) = args.light {
+        scene.lights = vec![light];
     }
     let geometry = scene.geometry();
     spinner.set_message(format!("building the BVH over {} triangles", geometry.triangle_count()));
@@ -94,7 +95,7 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         output: args.output.display().to_string(),
     };
     if args.json {
-        return print_json(&summary);
+        return print_json("render", &summary);
     }
     println!("backend: {}", summary.backend);
     println!(

@@ -30,7 +30,8 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
     if !matches!(ext.as_deref(), Some("vxl" | "binvox")) {
         bail!("output {} must end in .vxl or .binvox", args.output.display());
     }
-    let (gpu, backend_name) = backend(args.backend)?;
+    let gpu = backend(args.backend)?;
+    let backend_name = super::on(&gpu).describe();
     let spinner = ui.spinner();
     spinner.set_message(format!("loading {}", args.scene));
     let scene = load_scene(&args.scene)?;
@@ -92,7 +93,7 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         output: args.output.display().to_string(),
     };
     if args.json {
-        return print_json(&summary);
+        return print_json("voxelize", &summary);
     }
     println!("backend: {}", summary.backend);
     println!(

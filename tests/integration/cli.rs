@@ -30,8 +30,12 @@ fn ok(out: &Output) -> String {
     String::from_utf8(out.stdout.clone()).unwrap()
 }
 
+/// The `result` of a `--json` output (the command's name is the first argument).
 fn json(out: &Output) -> serde_json::Value {
-    serde_json::from_str(&ok(out)).expect("valid JSON on stdout")
+    let stdout = ok(out);
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON on stdout");
+    let command = v["command"].as_str().expect("a command field").to_string();
+    crate::json_result(stdout.as_bytes(), &command)
 }
 
 fn s(p: &Path) -> &str {
@@ -152,7 +156,7 @@ fn compare_measures_every_representation_and_rejects_bad_arguments() {
     assert!(dir.join("report.md").exists());
 
     for (args, needle) in [
-        (vec!["compare", "builtin:cube", "--res", "0"], "--res 0"),
+        (vec!["compare", "builtin:cube", "--res", "0"], "'0' for '--res"),
         (vec!["compare", "builtin:cube", "--thresholds=-1"], "--thresholds"),
         (vec!["compare", "no/such/file.obj", "--res", "8"], "no/such/file.obj"),
     ] {
@@ -164,7 +168,7 @@ fn compare_measures_every_representation_and_rejects_bad_arguments() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 4: `--backend gpu` never falls back to the CPU: an adapter that is not there, or a
+/// `--backend gpu` never falls back to the CPU: an adapter that is not there, or a
 /// request without a GPU kernel (solid voxelization), is an error (and leaves no file); where an adapter exists,
 /// GPU voxelization writes the CPU's voxels.
 #[test]
@@ -236,7 +240,7 @@ fn gpu_backend_is_explicit_and_never_falls_back() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 4: `voxlod compare --backend gpu` renders the ground truth, the baseline, Averages and
+/// `voxlod compare --backend gpu` renders the ground truth, the baseline, Averages and
 /// \[VJK21\] on the adapter and the rest on the CPU, says so per row, and scores like the CPU
 /// run (the kernels match the CPU within 1 sRGB step on ≥ 99 % of pixels, so SSIM agrees to
 /// well under 0.01). No adapter fails loudly unless `VOXLOD_ALLOW_NO_GPU=1` (the convention of
@@ -334,7 +338,7 @@ fn compare_on_the_gpu_scores_like_the_cpu_and_names_each_rows_backend() {
         voxlod(&[&args[..], &["--backend", "gpu", "--json", "-o", s(&dir.join("f"))]].concat());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
-    let forest: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let forest = crate::json_result(&out.stdout, "compare");
     assert_eq!(forest[0]["gt_backend"], adapter.as_str(), "{forest}");
     let averages: Vec<_> =
         filtered(&forest[0]).into_iter().filter(|r| r["method"] == "Averages").collect();

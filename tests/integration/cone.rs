@@ -1,4 +1,4 @@
-//! `voxlod cone` end to end on a tiny setting (issue 5): the sweep's rows, the references'
+//! `voxlod cone` end to end on a tiny setting: the sweep's rows, the references'
 //! noise, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
 //! shared by the cone tracer and the ray-traced reference.
 
@@ -30,7 +30,7 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = crate::json_result(&out.stdout, "cone");
     let rows = v["rows"].as_array().unwrap();
     // 2 resolutions × 2 cone counts × 2 opacity pre-filters (isotropic, directional).
     assert_eq!(rows.len(), 8, "{rows:?}");
@@ -46,8 +46,11 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     assert!(rows.iter().all(|r| r["ao_ssim"].as_f64().unwrap() < 1.0), "{rows:?}");
     assert_eq!(rows[0]["depth"], 3);
     assert_eq!(rows[4]["depth"], 4);
-    let noise = v["reference_noise_mse"].as_array().unwrap();
-    assert!(noise.iter().all(|x| x.as_f64().unwrap() >= 0.0));
+    let noise = &v["reference_noise_mse"];
+    assert!(["ao", "indirect"].iter().all(|k| noise[k].as_f64().unwrap() >= 0.0), "{noise}");
+    let octrees = v["octrees"].as_array().unwrap();
+    assert_eq!(octrees[0]["resolution"], 8);
+    assert!(octrees.iter().all(|o| o["voxels"].as_u64().unwrap() > 0), "{octrees:?}");
     // Leaks: 3 depths × 1 step × 2 options, each a fraction in [0, 1].
     let leaks = v["leaks"].as_array().unwrap();
     assert_eq!(leaks.len(), 6);
@@ -56,12 +59,12 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
         assert!((0.0..=1.0).contains(&f), "{l}");
     }
     assert!(dir.join("report.md").exists());
-    assert!(v["primary"].is_null());
+    assert!(v["lod"].is_null());
     let _ = std::fs::remove_dir_all(&dir);
 
     for (args, needle) in [
-        (vec!["cone", "builtin:cube", "--res", "12"], "--res 12"),
-        (vec!["cone", "builtin:cube", "--apertures", "180"], "--apertures 180"),
+        (vec!["cone", "builtin:cube", "--res", "12"], "'12' for '--res"),
+        (vec!["cone", "builtin:cube", "--apertures", "180"], "'180' for '--apertures"),
         (vec!["cone", "no/such/file.obj"], "no/such/file.obj"),
         // Convex: no surface sees another, every cone leaves the octree at its apex; an error,
         // not a row of MSE 0 / SSIM 1 measured from no sample.
@@ -102,8 +105,8 @@ fn cone_command_measures_primary_visibility_with_lod() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let p = &v["primary"];
+    let v = crate::json_result(&out.stdout, "cone");
+    let p = &v["lod"];
     let rows = p["rows"].as_array().unwrap();
     // 2 opacity pre-filters × 2 biases.
     assert_eq!(rows.len(), 4, "{rows:?}");
@@ -115,17 +118,18 @@ fn cone_command_measures_primary_visibility_with_lod() {
         let s = |r: &serde_json::Value| r["samples_per_pixel"].as_f64().unwrap();
         assert!(s(lod) < s(finest), "{lod} vs {finest}");
     }
-    let [near, far] = [0, 1].map(|i| p["footprint_range"][i].as_f64().unwrap());
+    let [near, far] =
+        ["nearest_voxels", "farthest_voxels"].map(|k| p["footprint"][k].as_f64().unwrap());
     assert!(0.0 < near && near <= far, "{p}");
     assert!(dir.join("assets/cone_lod_images.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 
     for (extra, needle) in [
-        ("--lod-bias=-1", "--lod-bias -1"),
-        ("--lod-bias=nan", "--lod-bias NaN"),
-        ("--lod-res=12", "--lod-res 12"),
-        ("--lod-step=0", "--lod-step 0"),
-        ("--lod-zoom-out=0", "--lod-zoom-out 0"),
+        ("--lod-bias=-1", "'-1' for '--lod-bias"),
+        ("--lod-bias=nan", "'nan' for '--lod-bias"),
+        ("--lod-res=12", "'12' for '--lod-res"),
+        ("--lod-step=0", "'0' for '--lod-step"),
+        ("--lod-zoom-out=0", "'0' for '--lod-zoom-out"),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_voxlod"))
             .args(["cone", "builtin:cornell", "--quiet", extra])
@@ -173,7 +177,7 @@ fn cone_command_traces_on_the_gpu_backend() {
     }
     let json = |out: std::process::Output| -> serde_json::Value {
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        serde_json::from_slice(&out.stdout).unwrap()
+        crate::json_result(&out.stdout, "cone")
     };
     let (cpu, gpu) = (json(run("cpu", None)), json(run("gpu", None)));
     assert!(cpu["backend"].as_str().unwrap().starts_with("cpu"), "{}", cpu["backend"]);

@@ -2,6 +2,14 @@
 
 mod cli;
 mod cone;
-mod experiment;
 mod scene_files;
 mod volume;
+
+/// The `result` of a `--json` output, after checking the envelope every command shares
+/// (`schema_version`, `command`; docs/json.md).
+pub fn json_result(stdout: &[u8], command: &str) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_slice(stdout).expect("valid JSON on stdout");
+    assert_eq!(v["schema_version"], 1, "{v}");
+    assert_eq!(v["command"], command, "{v}");
+    v["result"].take()
+}

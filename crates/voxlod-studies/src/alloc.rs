@@ -1,9 +1,18 @@
 //! Peak-memory measurement: a global allocator that counts live heap bytes and their peak.
 //! The `voxlod` binary registers it; library users can too:
 //!
-//! ```ignore
+//! ```
+//! use voxlod_studies::alloc::{self, TrackingAllocator};
+//!
 //! #[global_allocator]
-//! static ALLOC: voxlod::alloc::TrackingAllocator = voxlod::alloc::TrackingAllocator;
+//! static ALLOC: TrackingAllocator = TrackingAllocator;
+//!
+//! fn main() {
+//!     let (v, peak) = alloc::measure_peak(|| vec![0u8; 1 << 20]);
+//!     assert!(alloc::is_active());
+//!     assert!(peak.unwrap() >= 1 << 20, "{peak:?}");
+//!     drop(v);
+//! }
 //! ```
 //!
 //! Where it is not registered, [`is_active`] is false and reports print "n/a".

@@ -24,19 +24,19 @@ const EMBEDDED: &[Embedded] = &[
         name: "bunny",
         description: "the Stanford bunny (npm package `bunny`), 3 674 triangles, closed",
         file: "assets/bunny/bunny.obj",
-        bytes: include_bytes!("../assets/bunny/bunny.obj"),
+        bytes: include_bytes!("../../../assets/bunny/bunny.obj"),
     },
     Embedded {
         name: "engine",
         description: "Khronos glTF sample 2CylinderEngine, 121 496 triangles, 82 nodes",
         file: "assets/2CylinderEngine/2CylinderEngine.glb",
-        bytes: include_bytes!("../assets/2CylinderEngine/2CylinderEngine.glb"),
+        bytes: include_bytes!("../../../assets/2CylinderEngine/2CylinderEngine.glb"),
     },
     Embedded {
         name: "box-textured",
         description: "Khronos glTF sample BoxTextured, 12 triangles, one texture",
         file: "assets/BoxTextured/BoxTextured.glb",
-        bytes: include_bytes!("../assets/BoxTextured/BoxTextured.glb"),
+        bytes: include_bytes!("../../../assets/BoxTextured/BoxTextured.glb"),
     },
 ];
 
@@ -89,4 +89,16 @@ fn load_builtin(spec: &str) -> Result<Scene> {
     };
     scene.name = e.name.into();
     Ok(scene)
+}
+
+/// A scene's light in voxlod-cone's terms (the same light, for injection and shadow cones).
+pub fn cone_light(l: voxlod_scene::Light) -> voxlod_cone::Light {
+    match l {
+        voxlod_scene::Light::Directional { to_light, irradiance } => {
+            voxlod_cone::Light::Directional { to_light, irradiance }
+        }
+        voxlod_scene::Light::Point { position, intensity } => {
+            voxlod_cone::Light::Point { position, intensity }
+        }
+    }
 }

@@ -1,30 +1,25 @@
-//! The default experiment behind `cargo run --release`: for each embedded scene, render the
-//! ground truth from several viewpoints (and a second ground truth with another seed, to state
-//! its own noise), voxelize at a few resolutions, render each representation from the same
-//! cameras, score it against the ground truth on 8-bit sRGB, and collect time and peak memory
-//! per stage into a [`Report`].
+//! The default report behind `cargo run --release` (`voxlod report`): for each embedded scene,
+//! render the ground truth from several viewpoints (and a second ground truth with another
+//! seed, to state its own noise), voxelize at a few resolutions, render each representation
+//! from the same cameras, score it against the ground truth on 8-bit sRGB, and collect time and
+//! peak memory per stage ([`crate::baseline`], [`crate::filtered`]); then the procedural-volume
+//! study ([`crate::volume`]) and the cone-tracing study ([`crate::cone`]), all into one
+//! [`Report`].
 //!
 //! Each scene is a section with its own time budget: when a section runs over, its remaining
 //! resolutions are skipped and the report says so.
-
-mod baseline;
-mod filtered;
-mod gpu;
-mod views;
-pub mod volume;
 
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use voxlod_eval::report::{Report, Series};
 
-pub use baseline::{BaselineRow, SceneResult};
-pub use filtered::{FilteredConfig, FilteredResult, MethodRow};
-pub use gpu::{Backend, short_name};
-pub use views::orbit_views;
-pub use volume::{VolumeConfig, VolumeResult};
-
 use crate::Error;
+use crate::backend::{self, Backend};
+use crate::baseline::{self, BaselineRow, SceneResult};
+use crate::cone::{self, ConeConfig, ConeResult};
+use crate::filtered::FilteredConfig;
+use crate::volume::{self, VolumeConfig, VolumeResult};
 
 /// One scene of the experiment.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,8 +57,12 @@ pub struct Config {
     pub ambient: Vec3,
     /// The filtered-appearance comparison (None: the baseline only).
     pub filtered: Option<FilteredConfig>,
-    /// The procedural-volume section (issue 6) after the scenes (None: none).
+    /// The procedural-volume section after the scenes (None: none).
     pub volume: Option<VolumeConfig>,
+    /// The voxel cone tracing section after the volume (None: none).
+    pub cone: Option<ConeConfig>,
+    /// The command line that runs this configuration, named at the top of the report.
+    pub command: String,
 }
 
 impl Config {
@@ -88,6 +87,8 @@ impl Config {
                 mesh_spp: 16,
                 ..VolumeConfig::quick("smoke")
             }),
+            cone: Some(ConeConfig::quick()),
+            command: "cargo run --release".into(),
         }
     }
 
@@ -107,6 +108,8 @@ impl Config {
                 mesh_spp: 64,
                 ..VolumeConfig::quick("smoke")
             }),
+            cone: Some(ConeConfig::full()),
+            command: "cargo run --release -- report --full".into(),
             ..Self::quick()
         }
     }
@@ -127,21 +130,18 @@ pub struct Outcome {
     pub scenes: Vec<SceneResult>,
     /// The procedural-volume section's result, if the configuration asked for one.
     pub volume: Option<VolumeResult>,
+    /// The cone-tracing section's result, if the configuration asked for one.
+    pub cone: Option<ConeResult>,
     /// The report (not yet written).
     pub report: Report,
     /// Wall time of the whole run.
     pub elapsed: Duration,
 }
 
-/// Runs the experiment on the CPU. `progress` receives a short message at each stage.
-pub fn run(config: &Config, progress: &(dyn Fn(&str) + Sync)) -> Result<Outcome, Error> {
-    run_on(config, Backend::Cpu, progress)
-}
-
-/// Runs the experiment with the images that have a GPU kernel rendered on `backend` (see
-/// [`Backend`]); every row says which backend rendered it. With [`Backend::Cpu`] this is
-/// [`run`].
-pub fn run_on(
+/// Runs the report with the images that have a GPU kernel rendered on `backend` (the ground
+/// truth and the baseline and filtered rows; the volume and cone sections run on the CPU);
+/// every row says which backend rendered it. `progress` receives a short message at each stage.
+pub fn run(
     config: &Config,
     backend: Backend<'_>,
     progress: &(dyn Fn(&str) + Sync),
@@ -151,7 +151,7 @@ pub fn run_on(
         Backend::Cpu => None,
         Backend::Gpu(ctx) => {
             progress("compiling the GPU kernels");
-            Some(gpu::Kernels::new(ctx)?)
+            Some(backend::Kernels::new(ctx)?)
         }
     };
     let mut report = Report::new("voxlod report");
@@ -169,33 +169,44 @@ pub fn run_on(
     summary_plots(&mut report, &scenes);
     let volume = match &config.volume {
         Some(v) => {
-            let result = volume::run(v, progress)?;
-            volume::add_to_report(&mut report, &result)?;
+            let result = volume::run(v, Backend::Cpu, progress)?;
+            result.add_to_report(&mut report)?;
             Some(result)
         }
         None => None,
     };
-    Ok(Outcome { scenes, volume, report, elapsed: start.elapsed() })
+    // The cone study traces on the CPU in the report (its GPU kernel is checked by the
+    // equivalence suite and used by `voxlod cone --backend gpu`).
+    let cone = match &config.cone {
+        Some(c) => {
+            let result = cone::run(c, Backend::Cpu, progress)?;
+            result.add_to_report(&mut report)?;
+            Some(result)
+        }
+        None => None,
+    };
+    Ok(Outcome { scenes, volume, cone, report, elapsed: start.elapsed() })
 }
 
 fn intro(config: &Config) -> String {
     format!(
-        "Generated by `voxlod report` (`cargo run --release`{full}). Every number below was \
-         measured in this run on this machine ({threads} worker threads). Images are \
-         {size}×{size}; the ground truth casts {spp} stratified rays per pixel through a BVH \
-         over the mesh and box-filters them; every representation is rendered from the same {views} \
-         cameras and scored on 8-bit sRGB against it (MSE on [0,1], SSIM as Wang et al. 2004). \
-         Spreads are min–max over the views. Peak memory is the peak of live heap bytes during \
-         the stage beyond what was live before it, measured by a counting allocator.",
-        full = if config.gt_spp >= 1024 { " -- --full" } else { "" },
-        threads = rayon::current_num_threads(),
+        "Generated by `{command}` on {machine}. Every number below was measured in this run on \
+         this machine. Images are {size}×{size}; the ground truth casts {spp} stratified rays per \
+         pixel through a BVH over the mesh and box-filters them; every representation is \
+         rendered from the same {views} cameras and scored on 8-bit sRGB against it (MSE on \
+         [0,1], SSIM as Wang et al. 2004). Spreads are min–max over the views. Peak memory is \
+         the peak of live heap bytes during the stage beyond what was live before it, measured \
+         by a counting allocator. Times are wall-clock times and vary from run to run; every \
+         other figure is reproduced exactly by the same command.",
+        command = config.command,
+        machine = crate::machine::describe(),
         size = config.image_size,
         spp = config.gt_spp,
         views = config.views,
     )
 }
 
-fn gpu_intro(k: &gpu::Kernels<'_>) -> String {
+fn gpu_intro(k: &backend::Kernels<'_>) -> String {
     format!(
         " **Backend:** the images with a GPU kernel — the ground truth, the baseline, Averages, \
          \\[VJK21\\], the virtual mesh and Adaptive — were rendered on the GPU adapter \
@@ -243,122 +254,4 @@ fn summary_plots(report: &mut Report, scenes: &[SceneResult]) {
             ..Default::default()
         },
     );
-}
-
-/// Mean and range of a metric over the views.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Spread {
-    /// Mean.
-    pub mean: f64,
-    /// Minimum.
-    pub min: f64,
-    /// Maximum.
-    pub max: f64,
-}
-
-impl Spread {
-    /// Mean, min and max of `values` (NaN for none).
-    pub fn of(values: &[f64]) -> Self {
-        if values.is_empty() {
-            return Self { mean: f64::NAN, min: f64::NAN, max: f64::NAN };
-        }
-        Self {
-            mean: values.iter().sum::<f64>() / values.len() as f64,
-            min: values.iter().copied().fold(f64::INFINITY, f64::min),
-            max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        }
-    }
-
-    /// The spread of `f` applied to each statistic (for monotone `f`, e.g. `1 − x` swaps min and
-    /// max).
-    pub fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        let (a, b) = (f(self.min), f(self.max));
-        Self { mean: f(self.mean), min: a.min(b), max: a.max(b) }
-    }
-
-    /// `mean (min–max)` with `digits` decimals.
-    pub fn display(&self, digits: usize) -> String {
-        format!("{:.d$} ({:.d$}–{:.d$})", self.mean, self.min, self.max, d = digits)
-    }
-}
-
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
-
-/// Ground-truth images of one scene's views, rendered once per image side and kept.
-pub(crate) struct GroundTruths<'a> {
-    scene: &'a voxlod_scene::Scene,
-    geometry: &'a voxlod_scene::Geometry,
-    bvh: &'a voxlod_cpu::raycast::Bvh,
-    views: &'a [voxlod_scene::Camera],
-    spp: u32,
-    ambient: Vec3,
-    label: &'a str,
-    gpu: Option<&'a gpu::SceneGpu<'a>>,
-    by_size: Vec<(u32, Vec<voxlod_scene::Srgb8Image>)>,
-}
-
-impl<'a> GroundTruths<'a> {
-    /// An empty set for `views` of `scene`.
-    pub(crate) fn new(
-        scene: &'a voxlod_scene::Scene,
-        geometry: &'a voxlod_scene::Geometry,
-        bvh: &'a voxlod_cpu::raycast::Bvh,
-        views: &'a [voxlod_scene::Camera],
-        config: &Config,
-        label: &'a str,
-        gpu: Option<&'a gpu::SceneGpu<'a>>,
-    ) -> Self {
-        let (spp, ambient) = (config.gt_spp, config.ambient);
-        Self { scene, geometry, bvh, views, spp, ambient, label, gpu, by_size: Vec::new() }
-    }
-
-    /// Keeps images rendered elsewhere (seed 0) for side `size`.
-    pub(crate) fn insert(&mut self, size: u32, images: Vec<voxlod_scene::Srgb8Image>) {
-        self.by_size.push((size, images));
-    }
-
-    /// The seed-0 ground truth of every view at `size`², rendered on first use (on the GPU when
-    /// the scene was uploaded to one).
-    pub(crate) fn get(
-        &mut self,
-        size: u32,
-        progress: &(dyn Fn(&str) + Sync),
-    ) -> Result<&[voxlod_scene::Srgb8Image], Error> {
-        if let Some(i) = self.by_size.iter().position(|(s, _)| *s == size) {
-            return Ok(&self.by_size[i].1);
-        }
-        let options = voxlod_cpu::render::ground_truth::Options {
-            width: size,
-            height: size,
-            spp: self.spp,
-            seed: 0,
-            ambient: self.ambient,
-            shadows: true,
-            light_filter: None,
-        };
-        let mut images = Vec::new();
-        for (i, camera) in self.views.iter().enumerate() {
-            progress(&format!(
-                "{}: ground truth {size}², view {}/{}",
-                self.label,
-                i + 1,
-                self.views.len()
-            ));
-            let gt = match self.gpu {
-                Some(gpu) => gpu.ground_truth(camera, &options)?,
-                None => voxlod_cpu::render::ground_truth::render(
-                    self.scene,
-                    self.geometry,
-                    self.bvh,
-                    camera,
-                    &options,
-                )?,
-            };
-            images.push(gt.image.to_srgb8());
-        }
-        self.by_size.push((size, images));
-        Ok(&self.by_size.last().expect("just pushed").1)
-    }
 }

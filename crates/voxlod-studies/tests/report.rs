@@ -1,10 +1,13 @@
-//! The default experiment on a tiny configuration: every stage runs, the report is written,
-//! and the numbers it reports are consistent with each other.
+//! The default report on a tiny configuration: every stage runs, the report is written, and
+//! the numbers it reports are consistent with each other.
 
 use std::time::Duration;
 
 use glam::Vec3;
-use voxlod::experiment::{self, Config, FilteredConfig, SceneCase, VolumeConfig};
+use voxlod_studies::backend::Backend;
+use voxlod_studies::filtered::FilteredConfig;
+use voxlod_studies::report::{self, Config, SceneCase};
+use voxlod_studies::volume::VolumeConfig;
 
 fn tiny() -> Config {
     Config {
@@ -30,6 +33,8 @@ fn tiny() -> Config {
             image: 32,
             mesh_spp: 2,
         }),
+        cone: None,
+        command: "the report test".into(),
     }
 }
 
@@ -43,7 +48,7 @@ const METHODS: [&str; 5] = [
 
 #[test]
 fn tiny_experiment_writes_a_consistent_report() {
-    let outcome = experiment::run(&tiny(), &|_| {}).unwrap();
+    let outcome = report::run(&tiny(), Backend::Cpu, &|_| {}).unwrap();
     let scene = &outcome.scenes[0];
     assert_eq!(scene.triangles, 3674);
     assert_eq!(scene.rows.len(), 2);
@@ -80,7 +85,7 @@ fn tiny_experiment_writes_a_consistent_report() {
     assert_eq!(loose.mix, Some([1.0, 0.0, 0.0]));
     assert_eq!(loose.record_bytes, 12.0);
 
-    let dir = std::env::temp_dir().join(format!("voxlod-experiment-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("voxlod-report-{}", std::process::id()));
     let written = outcome.report.write(&dir).unwrap();
     let md = std::fs::read_to_string(&written.markdown).unwrap();
     assert!(md.contains("bunny") && md.contains("baseline (opaque cubes)"), "{md}");
@@ -104,7 +109,7 @@ fn tiny_experiment_writes_a_consistent_report() {
 #[test]
 fn an_exhausted_budget_skips_resolutions_and_says_so() {
     let config = Config { section_budget: Duration::ZERO, ..tiny() };
-    let outcome = experiment::run(&config, &|_| {}).unwrap();
+    let outcome = report::run(&config, Backend::Cpu, &|_| {}).unwrap();
     assert_eq!(outcome.scenes[0].skipped, vec![12, 48]);
     assert!(outcome.scenes[0].rows.is_empty());
     assert_eq!(outcome.scenes[0].filtered.as_ref().unwrap().skipped, vec![16]);

@@ -1,4 +1,4 @@
-//! The procedural-volume trade (issue 6): a particle preset over a small mesh scene (ground and
+//! The procedural-volume trade: a particle preset over a small mesh scene (ground and
 //! a block), rendered with the metavoxel pipeline of `voxlod_cpu::volume`, measured two ways:
 //!
 //! - **Attenuation**: the chapter's `1/(1+d)` and Beer–Lambert `e^(−d)`, both marched one
@@ -28,6 +28,7 @@ use voxlod_scene::particles::{
 use voxlod_scene::procedural::primitives::{cube, quad};
 use voxlod_scene::{Camera, Image, Light, Material, Scene};
 
+use crate::backend::Backend;
 use crate::{Error, alloc};
 
 /// The particle presets of `voxlod volume`.
@@ -201,11 +202,6 @@ fn secs(d: Duration) -> f64 {
     d.as_secs_f64()
 }
 
-/// Runs the measurement on the CPU backend ([`run_on`] without a GPU).
-pub fn run(config: &VolumeConfig, progress: &dyn Fn(&str)) -> Result<VolumeResult, Error> {
-    run_on(config, None, progress)
-}
-
 /// One volume built and marched: the volume (the light filter of the shadowed mesh), the
 /// image, the build and march times, the stats and stage times, the volume's bytes.
 struct Frame {
@@ -218,12 +214,12 @@ struct Frame {
 
 /// The backend that builds and marches: the CPU reference, or the GPU kernels
 /// (`voxlod_gpu::volume`) with the mesh's BVH uploaded for the scene's shadow.
-enum Backend<'a> {
+enum Builder<'a> {
     Cpu,
     Gpu(voxlod_gpu::volume::VolumeKernels<'a>, voxlod_gpu::raycast::GpuBvh),
 }
 
-impl Backend<'_> {
+impl Builder<'_> {
     /// Builds (with `view` culling, `bvh` shadowing) and marches one volume.
     #[allow(clippy::too_many_arguments)]
     fn frame(
@@ -240,7 +236,7 @@ impl Backend<'_> {
         read_back: bool,
     ) -> Result<Frame, Error> {
         match self {
-            Backend::Gpu(k, gpu_bvh) => {
+            Builder::Gpu(k, gpu_bvh) => {
                 let t = Instant::now();
                 let v = k.build(spheres, map, spec, settings, Some(view), Some(gpu_bvh))?;
                 let build = t.elapsed();
@@ -262,7 +258,7 @@ impl Backend<'_> {
                 };
                 Ok(Frame { volume, image, build, march, bytes })
             }
-            Backend::Cpu => {
+            Builder::Cpu => {
                 let t = Instant::now();
                 let v = volume::build(spheres, map, spec, settings, Some(view), Some(bvh))?;
                 let build = t.elapsed();
@@ -279,9 +275,9 @@ impl Backend<'_> {
 /// Runs the measurement, building and marching on `gpu` when given (the mesh's ground truth
 /// stays on the CPU). Errors on an unknown preset, a
 /// resolution not divisible by a metavoxel size, or any pipeline error.
-pub fn run_on(
+pub fn run(
     config: &VolumeConfig,
-    gpu: Option<&voxlod_gpu::Context>,
+    backend: Backend<'_>,
     progress: &dyn Fn(&str),
 ) -> Result<VolumeResult, Error> {
     let bad = |name: &str, value: String, reason: &str| {
@@ -331,25 +327,22 @@ pub fn run_on(
     // Attenuation models at the size closest to the chapter's M = 32.
     let m_ref = *config.metavoxel_sizes.iter().min_by_key(|&&m| m.abs_diff(32)).unwrap_or(&32);
     let spec = VolumeSpec::fit(lo, hi, to_light, config.resolution / m_ref, m_ref)?;
-    let backend = match gpu {
-        None => Backend::Cpu,
-        Some(ctx) => {
+    let builder = match backend {
+        Backend::Cpu => Builder::Cpu,
+        Backend::Gpu(ctx) => {
             progress("compiling the GPU volume kernels");
             let k = voxlod_gpu::volume::VolumeKernels::new(ctx)?;
             let gpu_bvh = voxlod_gpu::raycast::upload_bvh(ctx, &bvh, &geometry)?;
-            Backend::Gpu(k, gpu_bvh)
+            Builder::Gpu(k, gpu_bvh)
         }
     };
-    let backend_name = match gpu {
-        None => "cpu (rayon)".to_string(),
-        Some(ctx) => format!("gpu: {}", ctx.summary()),
-    };
+    let backend_name = backend.describe();
     let mut images = vec![("mesh".to_string(), gt.image.clone())];
     let mut rendered = Vec::new();
     for att in [Attenuation::Exact, Attenuation::Chapter, Attenuation::BeerLambert] {
         progress(&format!("volume, {}", att.name()));
         let settings = BuildSettings { attenuation: att, ..Default::default() };
-        let f = backend.frame(
+        let f = builder.frame(
             &spheres,
             map,
             &spec,
@@ -393,7 +386,7 @@ pub fn run_on(
         let spec = VolumeSpec::fit(lo, hi, to_light, config.resolution / m, m)?;
         let settings = BuildSettings::default();
         let (built, peak_bytes) = alloc::measure_peak(|| {
-            backend.frame(
+            builder.frame(
                 &spheres,
                 map,
                 &spec,
@@ -521,42 +514,42 @@ impl VolumeResult {
     }
 }
 
-/// Appends the preset's section (heading, tables, images) to `report`.
-pub fn add_to_report(
-    report: &mut voxlod_eval::report::Report,
-    result: &VolumeResult,
-) -> Result<(), Error> {
-    report.heading(2, format!("Procedural volume: {}", result.preset));
-    report.text(
-        "Metavoxel pipeline (seed 001): binning, culling, fill, light propagation, eye march in \
+impl VolumeResult {
+    /// Appends the preset's section (heading, tables, images) to `report`.
+    pub fn add_to_report(&self, report: &mut voxlod_eval::report::Report) -> Result<(), Error> {
+        let result = self;
+        report.heading(2, format!("Procedural volume: {}", result.preset));
+        report.text(
+        "Metavoxel pipeline (McNabb, GPU Pro, sparse procedural volume rendering): binning, culling, fill, light propagation, eye march in \
          the over/under sort order, composited over the mesh render (its depth stops the rays, \
          its BVH shadows the volume, and the volume shadows it: the mesh is rendered again \
          with Volume::transmittance_to_light filtering each shading point's direct light). Errors are of the composited 8-bit sRGB image against the \
          exact reference; times are wall-clock on this machine, all cores.",
     );
-    report.text(format!(
-        "Volume built and marched on {}{}.",
-        result.backend,
-        if result.backend.starts_with("gpu") {
-            " (the mesh's ground truth on the CPU; volume bytes are device bytes, peak MiB the \
+        report.text(format!(
+            "Volume built and marched on {}{}.",
+            result.backend,
+            if result.backend.starts_with("gpu") {
+                " (the mesh's ground truth on the CPU; volume bytes are device bytes, peak MiB the \
              host heap)"
-        } else {
-            ""
-        }
-    ));
-    report.text(format!(
+            } else {
+                ""
+            }
+        ));
+        report.text(format!(
         "Mesh ground truth ({}×{}, {} rays per pixel): {:.3} s without the volume's shadow; the \
          'shadowed mesh s' column is the same render with it, per model.",
         result.image, result.image, result.mesh_spp, result.mesh_s
     ));
-    for t in result.tables()? {
-        report.table(t);
-    }
-    report.images(
-        format!("volume-{}", result.preset),
-        "mesh alone, then the volume (and its shadow on the mesh) composited with the \
+        for t in result.tables()? {
+            report.table(t);
+        }
+        report.images(
+            format!("volume-{}", result.preset),
+            "mesh alone, then the volume (and its shadow on the mesh) composited with the \
          reference, 1/(1+d) and exp(-d)",
-        result.grid(),
-    );
-    Ok(())
+            result.grid(),
+        );
+        Ok(())
+    }
 }

@@ -10,11 +10,11 @@
 use std::time::{Duration, Instant};
 
 use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::vmesh::VirtualMeshGrid;
-use voxlod_cpu::appearance::{Appearance, averages, sggx, vmesh};
+use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
 use voxlod_cpu::render::filtered::{self, FrameCache};
 use voxlod_cpu::voxelize::{self, Mode};
 use voxlod_eval::report::{Cell, Column, LabeledImage, NumberFormat, Plot, Series, Table};
@@ -23,9 +23,10 @@ use voxlod_format::GridSpec;
 use voxlod_gpu::filtered::GpuRecords;
 use voxlod_scene::{Camera, Geometry, Scene, Srgb8Image};
 
-use super::gpu::SceneGpu;
-use super::{GroundTruths, Spread, ms};
 use crate::Error;
+use crate::backend::SceneGpu;
+use crate::ground_truths::GroundTruths;
+use crate::spread::{Spread, ms};
 
 /// Settings of the filtered-appearance comparison.
 #[derive(Clone, Debug, PartialEq)]
@@ -88,7 +89,9 @@ pub struct MethodRow {
     pub mse: Spread,
     /// SSIM against the ground truth, over views.
     pub ssim: Spread,
-    /// For Adaptive: the share of voxels of each kind (Averages, \[VJK21\], virtual mesh).
+    /// For Adaptive: the share of voxels of each kind (Averages, \[VJK21\], virtual mesh); in
+    /// JSON an object `{"averages", "vjk21", "virtual_mesh"}`.
+    #[serde(serialize_with = "ser_mix")]
     pub mix: Option<[f64; 3]>,
     /// What rendered the row: `cpu` or the GPU adapter's short name. None (and left out of
     /// the JSON) in an all-CPU run, whose output is unchanged.
@@ -254,7 +257,7 @@ fn build_all(
 
     progress("virtual mesh");
     let t = Instant::now();
-    let g = precompute(ctx, &opts, vmesh::fit)?;
+    let g = precompute(ctx, &opts, virtual_mesh::fit)?;
     let precompute_vm = t.elapsed();
     for (rule, projected_area, name) in [
         (DirectionalRule::Lines, false, "virtual mesh (lines)"),
@@ -480,4 +483,15 @@ impl FilteredResult {
         }
         Ok(tables)
     }
+}
+
+fn ser_mix<S: serde::Serializer>(mix: &Option<[f64; 3]>, s: S) -> Result<S::Ok, S::Error> {
+    #[derive(serde::Serialize)]
+    struct Mix {
+        averages: f64,
+        vjk21: f64,
+        virtual_mesh: f64,
+    }
+    let mix = mix.map(|[averages, vjk21, virtual_mesh]| Mix { averages, vjk21, virtual_mesh });
+    serde::Serialize::serialize(&mix, s)
 }

@@ -1,6 +1,8 @@
-//! The experiment on the GPU backend (`voxlod compare --backend gpu`): every image — the
-//! ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines, Circles,
-//! Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one adapter.
+//! Where a study runs the work that has a GPU kernel ([`Backend`]), and the kernels of the
+//! filtered-appearance studies on the GPU backend (`voxlod compare --backend gpu`): every
+//! image — the ground truth, the baseline, Averages, \[VJK21\], the virtual-mesh rows (Lines,
+//! Circles, Lines × area) and the Adaptive rows — is rendered by voxlod-gpu's kernels on one
+//! adapter.
 //! Every row says which backend rendered it, and which precomputed its records: Averages is
 //! precomputed on the adapter too (`voxlod_gpu::precompute`, for every scene: textured,
 //! alpha-masked and alpha-blended materials included), the other representations on the CPU.
@@ -15,14 +17,25 @@ use voxlod_gpu::ground_truth::{GpuScene, GroundTruthKernel};
 
 use crate::Error;
 
-/// Where the experiment renders the images that have a GPU kernel.
+/// Where a study runs the work that has a GPU kernel (each study says which work that is).
 #[derive(Clone, Copy, Debug, Default)]
 pub enum Backend<'a> {
-    /// Everything on the CPU reference (the default; the report is unchanged by the GPU code).
+    /// Everything on the CPU reference (the default).
     #[default]
     Cpu,
-    /// The ground truth and every representation's rows on this adapter.
+    /// The work with a GPU kernel on this adapter; everything else on the CPU.
     Gpu(&'a Context),
+}
+
+impl Backend<'_> {
+    /// `cpu (rayon)` or `gpu: <adapter summary>` (the summary says when the adapter is a CPU
+    /// implementation, whose timings are CPU timings).
+    pub fn describe(&self) -> String {
+        match self {
+            Backend::Cpu => "cpu (rayon)".into(),
+            Backend::Gpu(ctx) => format!("gpu: {}", ctx.summary()),
+        }
+    }
 }
 
 /// The adapter's name for table cells: its name without the driver's parenthesized details

@@ -11,9 +11,12 @@ use voxlod_eval::{ImageMetrics, compare, error_heatmap};
 use voxlod_format::GridSpec;
 use voxlod_scene::Srgb8Image;
 
-use super::filtered::{self, FilteredResult, SceneInputs};
-use super::gpu::Kernels;
-use super::{Config, GroundTruths, SceneCase, Spread, ms, orbit_views};
+use crate::backend::Kernels;
+use crate::filtered::{self, FilteredResult, SceneInputs};
+use crate::ground_truths::GroundTruths;
+use crate::report::{Config, SceneCase};
+use crate::spread::{Spread, ms};
+use crate::views::orbit_views;
 use crate::{Error, alloc};
 
 /// One row of a scene's table: the baseline at one resolution.
@@ -82,8 +85,8 @@ pub struct SceneResult {
     pub skipped: Vec<u32>,
     /// The filtered-appearance comparison, when configured.
     pub filtered: Option<FilteredResult>,
-    /// Wall time of the section.
-    #[serde(serialize_with = "ser_secs")]
+    /// Wall time of the section (`elapsed_s` in JSON, seconds).
+    #[serde(rename = "elapsed_s", serialize_with = "ser_secs")]
     pub elapsed: Duration,
     /// Images for the report: ground truth, then baseline per resolution (view 0), then the
     /// error heat map of the finest resolution.
