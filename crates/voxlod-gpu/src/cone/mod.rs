@@ -56,7 +56,6 @@ use voxlod_cone::{ConeMedium, ConeTracer, RadiancePayload, TraceOptions};
 use voxlod_cpu::render::ground_truth::GBuffer;
 use voxlod_octree::{AveragePayload, Directional, FlatOctree, GpuLevel, GpuNode, GpuTile, Octree};
 
-use crate::raycast::entry;
 use crate::{Context, Result};
 
 /// The march, sampling and tracer (the payload comes first: [`ISOTROPIC_WGSL`] or
@@ -454,38 +453,24 @@ impl<'a> ConeKernel<'a> {
             .collect();
         let dirs_buf = ctx.storage_init("diffuse directions", bytemuck::cast_slice(&dirs))?;
         let params = self.params(tree, options, query, width, count as u32);
-        let layout = pipeline.get_bind_group_layout(0);
         let rows_per = (self.points_per_dispatch / width as u64).clamp(1, height as u64) as u32;
         let mut first = 0;
         while first < height {
             let rows = rows_per.min(height - first);
             let p = GpuConeParams { tree: [params.tree[0], params.tree[1], first, rows], ..params };
             let uniform = ctx.uniform("cone params", bytemuck::bytes_of(&p))?;
-            let bind = ctx.guarded("binding cone-tracing buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("cone tracing"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &tree.levels),
-                        entry(2, &tree.nodes),
-                        entry(3, &tree.tiles),
-                        entry(4, &tree.payload),
-                        entry(5, &dirs_buf),
-                        entry(6, &points_buf),
-                        entry(7, &shades),
-                    ],
-                })
-            })?;
-            let (lx, ly) = ctx.image_dispatch("cone-tracing dispatch", width, rows)?;
-            let mut encoder = ctx.device().create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(lx, ly, 1);
-            }
-            ctx.submit("tracing cones", encoder)?;
+            let buffers = [
+                &uniform,
+                &tree.levels,
+                &tree.nodes,
+                &tree.tiles,
+                &tree.payload,
+                &dirs_buf,
+                &points_buf,
+                &shades,
+            ];
+            let workgroups = ctx.image_dispatch("cone-tracing dispatch", width, rows)?;
+            ctx.dispatch("tracing cones", pipeline, &buffers, workgroups)?;
             first += rows;
         }
         let raw = ctx.read(&shades, out_bytes)?;

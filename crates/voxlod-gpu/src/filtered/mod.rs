@@ -114,7 +114,6 @@ use voxlod_scene::{Camera, Image, Light};
 
 pub mod voxels;
 
-use crate::raycast::entry;
 use crate::{Context, Error, Result, light_words};
 
 /// The WGSL source of the kernel: shading, then the renderer.
@@ -445,29 +444,8 @@ impl<'a> FilteredKernel<'a> {
         let bytes = width as u64 * height as u64 * 16;
         let out = ctx.storage_zeroed("filtered image", bytes)?;
         let uniform = ctx.uniform("filtered params", bytemuck::bytes_of(&params))?;
-        let layout = self.pipeline.get_bind_group_layout(0);
-        let bind = ctx.guarded("binding filtered-renderer buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("filtered averages"),
-                layout: &layout,
-                entries: &[
-                    entry(0, &uniform),
-                    entry(1, &app.table),
-                    entry(2, &app.bricks),
-                    entry(3, &app.slots),
-                    entry(4, &app.records),
-                    entry(5, &out),
-                ],
-            })
-        })?;
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(lx, ly, 1);
-        }
-        ctx.submit("rendering filtered records", encoder)?;
+        let buffers = [&uniform, &app.table, &app.bricks, &app.slots, &app.records, &out];
+        ctx.dispatch("rendering filtered records", &self.pipeline, &buffers, (lx, ly))?;
         read_image(ctx, &out, width, height)
     }
 

@@ -73,7 +73,7 @@ use super::{
     FilteredKernel, GpuFilteredParams, GpuRecord, GpuRecords, RecordKind, brick_lookup, non_empty,
     read_image,
 };
-use crate::raycast::entry;
+use crate::context::record_pass;
 use crate::{Context, Error, Result};
 
 /// The WGSL source of the per-voxel passes: shading, the first part's renderer (its
@@ -397,33 +397,27 @@ impl FilteredKernel<'_> {
         let cache =
             ctx.storage_zeroed("per-voxel cache of the voxel passes", cache_bytes(&v.params))?;
         let uniform = ctx.uniform("filtered params", bytemuck::bytes_of(params))?;
-        let bind = ctx.guarded("binding the voxel passes' buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("filtered voxel passes"),
-                layout: &passes.layout,
-                entries: &[
-                    entry(0, &uniform),
-                    entry(1, &app.table),
-                    entry(2, &app.bricks),
-                    entry(3, &app.slots),
-                    entry(4, &app.records),
-                    entry(5, &out),
-                    entry(6, &v.tables),
-                    entry(7, &v.voxels),
-                    entry(8, &v.vmesh),
-                    entry(9, &cache),
-                ],
-            })
-        })?;
+        let buffers = [
+            &uniform,
+            &app.table,
+            &app.bricks,
+            &app.slots,
+            &app.records,
+            &out,
+            &v.tables,
+            &v.voxels,
+            &v.vmesh,
+            &cache,
+        ];
+        let bind = ctx.bind_group("binding the voxel passes' buffers", &passes.layout, &buffers)?;
         let mut encoder = ctx.device().create_command_encoder(&Default::default());
         // Separate passes: each reads what the previous one wrote.
-        for (pipeline, (x, y)) in
-            [(&passes.light, (vx, vy)), (&passes.view, (vx, vy)), (&passes.composite, (lx, ly))]
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+        for (name, pipeline, workgroups) in [
+            ("light pass", &passes.light, (vx, vy)),
+            ("view pass", &passes.view, (vx, vy)),
+            ("composite", &passes.composite, (lx, ly)),
+        ] {
+            record_pass(&mut encoder, name, pipeline, &bind, workgroups);
         }
         ctx.submit("rendering virtual-mesh/Adaptive records", encoder)?;
         read_image(ctx, &out, width, height)

@@ -52,7 +52,7 @@ use voxlod_cpu::render::sampling::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
 use crate::material::{MaterialBuffers, gpu_materials};
-use crate::raycast::{GpuBvh, entry, upload_bvh};
+use crate::raycast::{GpuBvh, upload_bvh};
 use crate::{Context, Error, Result, light_words};
 
 /// The WGSL source of the kernel: RNG, shading, BVH traversal, then the renderer.
@@ -226,7 +226,6 @@ impl<'a> GroundTruthKernel<'a> {
         let flags =
             u32::from(shadows) | if point { 2 } else { 0 } | if scene.any_alpha { 4 } else { 0 };
         let per_dispatch = (self.rays_per_dispatch / pixels).clamp(1, spp as u64) as u32;
-        let layout = self.pipeline.get_bind_group_layout(0);
         let mut first = 0;
         while first < spp {
             let end = first.saturating_add(per_dispatch).min(spp);
@@ -249,31 +248,18 @@ impl<'a> GroundTruthKernel<'a> {
                 ],
             };
             let uniform = ctx.uniform("ground-truth params", bytemuck::bytes_of(&params))?;
-            let bind = ctx.guarded("binding ground-truth buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("ground truth"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &scene.bvh.nodes),
-                        entry(2, &scene.bvh.tris),
-                        entry(3, &scene.shade_tris),
-                        entry(4, &scene.materials.materials),
-                        entry(5, &sums),
-                        entry(6, &gbuffer),
-                        entry(7, &scene.materials.textures),
-                        entry(8, &scene.materials.texels),
-                    ],
-                })
-            })?;
-            let mut encoder = ctx.device().create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(lx, ly, 1);
-            }
-            ctx.submit("rendering the ground truth", encoder)?;
+            let buffers = [
+                &uniform,
+                &scene.bvh.nodes,
+                &scene.bvh.tris,
+                &scene.shade_tris,
+                &scene.materials.materials,
+                &sums,
+                &gbuffer,
+                &scene.materials.textures,
+                &scene.materials.texels,
+            ];
+            ctx.dispatch("rendering the ground truth", &self.pipeline, &buffers, (lx, ly))?;
             first = end;
         }
         let raw = ctx.read(&sums, bytes)?;

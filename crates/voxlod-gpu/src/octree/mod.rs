@@ -71,6 +71,7 @@ use voxlod_octree::{
     AveragePayload, BuildOptions, FlatOctree, GpuLevel, GpuNode, GpuTile, NONE, Payload,
 };
 
+use crate::context::record_pass;
 use crate::{Context, Error, Result};
 
 /// The WGSL shared by every kernel: the mirrors of [`GpuNode`], [`GpuTile`], [`GpuLevel`],
@@ -355,29 +356,11 @@ impl<'a> OctreeBuilder<'a> {
         let (x, y) = ctx.dispatch_size(name, workgroups)?;
         let uniform = ctx.uniform(name, bytemuck::bytes_of(&params))?;
         let pipeline = &self.pipelines[kernel];
+        let mut all = vec![(0, &uniform)];
+        all.extend_from_slice(entries);
         let layout = pipeline.get_bind_group_layout(0);
-        let mut all =
-            vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
-        all.extend(entries.iter().map(|&(binding, b)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        }));
-        let bind = ctx.guarded("binding octree-build buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(name),
-                layout: &layout,
-                entries: &all,
-            })
-        })?;
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(name),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        let bind = ctx.bind_group_at("binding octree-build buffers", &layout, &all)?;
+        record_pass(encoder, name, pipeline, &bind, (x, y));
         keep.push(uniform);
         Ok(())
     }

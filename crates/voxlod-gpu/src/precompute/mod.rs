@@ -103,7 +103,6 @@ use voxlod_scene::{AlphaMode, Geometry, Scene};
 
 use crate::ground_truth::gpu_shade_tris;
 use crate::material::{GpuMaterial, gpu_materials};
-use crate::raycast::entry;
 use crate::{Context, Error, Result};
 
 /// The WGSL source of the kernel: the RNG, materials and textures, then the sampler.
@@ -365,7 +364,6 @@ impl<'a> Precomputer<'a> {
                 // Without lines, one element: a binding holds at least one.
                 size_of::<GpuLineOut>() as u64 * if outputs.lines { line_count } else { 1 };
             let line_buf = ctx.storage_zeroed("precompute lines", line_bytes)?;
-            let layout = self.pipeline.get_bind_group_layout(0);
             let mut first = 0u32;
             while (first as usize) < n {
                 let by_lines = (LINES_PER_DISPATCH / rays as u64).clamp(1, u32::MAX as u64) as u32;
@@ -385,31 +383,18 @@ impl<'a> Precomputer<'a> {
                     seed: [dimension_base(opts.seed), count, blend_key(opts.seed), 0],
                 };
                 let uniform = ctx.uniform("precompute params", bytemuck::bytes_of(&params))?;
-                let bind = ctx.guarded("binding precompute buffers", || {
-                    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("precompute"),
-                        layout: &layout,
-                        entries: &[
-                            entry(0, &uniform),
-                            entry(1, &voxel_buf),
-                            entry(2, &tri_buf),
-                            entry(3, &shade_buf),
-                            entry(4, &mat_bufs.materials),
-                            entry(5, &out_buf),
-                            entry(6, &line_buf),
-                            entry(7, &mat_bufs.textures),
-                            entry(8, &mat_bufs.texels),
-                        ],
-                    })
-                })?;
-                let mut encoder = ctx.device().create_command_encoder(&Default::default());
-                {
-                    let mut pass = encoder.begin_compute_pass(&Default::default());
-                    pass.set_pipeline(&self.pipeline);
-                    pass.set_bind_group(0, &bind, &[]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-                ctx.submit("sampling voxels", encoder)?;
+                let buffers = [
+                    &uniform,
+                    &voxel_buf,
+                    &tri_buf,
+                    &shade_buf,
+                    &mat_bufs.materials,
+                    &out_buf,
+                    &line_buf,
+                    &mat_bufs.textures,
+                    &mat_bufs.texels,
+                ];
+                ctx.dispatch("sampling voxels", &self.pipeline, &buffers, (x, y))?;
                 first += count;
             }
             out_raw = ctx.read(&out_buf, out_bytes)?;

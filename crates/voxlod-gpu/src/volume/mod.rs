@@ -368,10 +368,6 @@ fn at_least_one<T: bytemuck::Zeroable>(mut v: Vec<T>) -> Vec<T> {
     v
 }
 
-fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
-}
-
 fn attenuation_id(a: Attenuation) -> u32 {
     match a {
         Attenuation::Chapter => 0,
@@ -406,33 +402,6 @@ impl<'a> VolumeKernels<'a> {
     /// The context.
     pub fn context(&self) -> &'a Context {
         self.ctx
-    }
-
-    fn dispatch(
-        &self,
-        during: &'static str,
-        pipeline: &wgpu::ComputePipeline,
-        buffers: &[&wgpu::Buffer],
-        (x, y): (u32, u32),
-    ) -> Result<()> {
-        let ctx = self.ctx;
-        let layout = pipeline.get_bind_group_layout(0);
-        let entries: Vec<_> = buffers.iter().enumerate().map(|(i, b)| entry(i as u32, b)).collect();
-        let bind = ctx.guarded("binding volume buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(during),
-                layout: &layout,
-                entries: &entries,
-            })
-        })?;
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
-        ctx.submit(during, encoder)
     }
 
     /// Binning (Listing 5.1) on the GPU: the CPU's [`binning::bin`], exactly (module docs).
@@ -483,7 +452,7 @@ impl<'a> VolumeKernels<'a> {
         let cands = ctx.storage_init("binning candidates", bytemuck::cast_slice(&records))?;
         let results = ctx.storage_zeroed("binning results", result_bytes)?;
         let wg = ctx.dispatch_size("binning workgroups", total.div_ceil(WORKGROUP))?;
-        self.dispatch("binning", &self.binning, &[&uniform, &cands, &results], wg)?;
+        self.ctx.dispatch("binning", &self.binning, &[&uniform, &cands, &results], wg)?;
         let results: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.read(&results, result_bytes)?);
         // Compaction, in candidate order; the undecided ones by the reference predicate.
         let mut pairs = Vec::new();
@@ -598,7 +567,7 @@ impl<'a> VolumeKernels<'a> {
             let list_buf = ctx.storage_init("fill bins", bytemuck::cast_slice(&lists))?;
             let texels = ctx.storage_init("cube map", bytemuck::cast_slice(map.texels()))?;
             let wg = ctx.dispatch_size("fill workgroups", voxels.div_ceil(WORKGROUP))?;
-            self.dispatch(
+            self.ctx.dispatch(
                 "filling metavoxels",
                 &self.fill,
                 &[
@@ -738,7 +707,7 @@ impl<'a> VolumeKernels<'a> {
             let shadow_buf =
                 ctx.storage_init("propagation shadow", bytemuck::cast_slice(&shadow))?;
             let wg = ctx.dispatch_size("propagation workgroups", items.div_ceil(WORKGROUP))?;
-            self.dispatch(
+            self.ctx.dispatch(
                 "propagating light",
                 &self.propagate,
                 &[
@@ -887,7 +856,7 @@ impl<'a> VolumeKernels<'a> {
             params.eye_voxel[3] = 1e-4 * f.voxel_size;
             let uniform = ctx.uniform("exact march params", bytemuck::bytes_of(&params))?;
             let index_buf = ctx.storage_init("metavoxel index", bytemuck::cast_slice(&index))?;
-            self.dispatch(
+            self.ctx.dispatch(
                 "marching eye rays (exact)",
                 &self.march_exact,
                 &[&uniform, &index_buf, &volume.voxels, &depth_buf, &image],
@@ -917,7 +886,7 @@ impl<'a> VolumeKernels<'a> {
             let uniform = ctx.uniform("march params", bytemuck::bytes_of(&params))?;
             let order =
                 ctx.storage_init("march order", bytemuck::cast_slice(&at_least_one(entries)))?;
-            self.dispatch(
+            self.ctx.dispatch(
                 "marching eye rays",
                 &self.march,
                 &[&uniform, &order, &volume.voxels, &depth_buf, &image],

@@ -53,6 +53,7 @@ use voxlod_cpu::voxelize::{Mode, overlap};
 use voxlod_format::{BrickMap, GridSpec, morton};
 use voxlod_scene::Geometry;
 
+use crate::context::record_pass;
 use crate::{Context, Error, Result};
 
 /// The WGSL source of the kernel.
@@ -357,25 +358,9 @@ impl<'a> Voxelizer<'a> {
                 bytemuck::cast_slice(&prepared.starts[first..first + count]),
             )?;
             let (x, y) = ctx.dispatch_size("voxelize workgroups", items.div_ceil(WORKGROUP))?;
-            let bind = ctx.guarded("binding voxelize buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("voxelize"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &tris),
-                        entry(2, &starts),
-                        entry(3, &bits),
-                        entry(4, &counts),
-                    ],
-                })
-            })?;
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-            }
+            let buffers = [&uniform, &tris, &starts, &bits, &counts];
+            let bind = ctx.bind_group("binding voxelize buffers", &layout, &buffers)?;
+            record_pass(&mut encoder, "voxelize", &self.pipeline, &bind, (x, y));
             keep.push((uniform, tris, starts, bind));
         }
         ctx.submit("voxelizing", encoder)?;
@@ -388,10 +373,6 @@ impl<'a> Voxelizer<'a> {
         drop(keep);
         Ok(GpuVoxelization { grid: *grid, mode: options.mode, bits: words, counts })
     }
-}
-
-fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 
 #[cfg(test)]
