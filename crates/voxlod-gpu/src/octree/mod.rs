@@ -1,7 +1,8 @@
 //! The sparse voxel octree build on the GPU: the lock-free level-by-level build of
-//! [`voxlod_octree::flat`] (the per-frame build of Yalçıner and Sahillioğlu 2020, §4.3–4.4,
-//! with an exclusive prefix sum where the paper takes a spin lock) as wgpu kernels, producing the flat layout [`FlatOctree`] (nodes of all levels root first, 2×2×2 tiles with
-//! +x/+y/+z links on the sparse levels) and the bottom-up Averages pre-filter.
+//! [`voxlod_octree::flat`] (the per-frame build of Yalçıner and Sahillioğlu 2020, §4.3–4.4, with an
+//! exclusive prefix sum where the paper takes a spin lock) as wgpu kernels, producing the flat
+//! layout [`FlatOctree`] (nodes of all levels root first, 2×2×2 tiles with +x/+y/+z links on the
+//! sparse levels) and the bottom-up Averages pre-filter.
 //!
 //! # Contract
 //! The topology — the level table, every node's child pointer and mask, every tile's links,
@@ -44,17 +45,17 @@
 //! and `prefilter` per level bottom-up (one invocation per node over its child tile).
 //!
 //! # On a real GPU
-//! Expected, not measured on one: the mark pass should dominate (per level, 8 descents per
-//! voxel of `first_dense − l` dependent reads each). The eight invocations of one voxel sit
-//! in one warp and walk the same path (the same cache lines; their flag writes hit at most 8 parents, usually 1–4), voxels in
-//! input order are spatially coherent if the input is (a Morton-sorted input makes whole warps
-//! walk shared paths), and divergence is limited to the `o ≥ d` test at the grid's lower
+//! Expected, not measured on one: the mark pass should dominate (per level, 8 descents per voxel of
+//! `first_dense − l` dependent reads each). The eight invocations of one voxel sit in one warp and
+//! walk the same path (the same cache lines; their flag writes hit at most 8 parents, usually 1–4),
+//! voxels in input order are spatially coherent if the input is (a Morton-sorted input makes whole
+//! warps walk shared paths), and divergence is limited to the `o ≥ d` test at the grid's lower
 //! faces. Flags are plain relaxed stores (no contention beyond the cache line). The scan is
-//! bandwidth-bound (two reads and one write per parent) and the allocate, link and prefilter
-//! passes read and write consecutive nodes and tiles in consecutive invocations (coalesced;
-//! link reads the parent level's child pointers at Morton-near addresses). The per-level read
-//! back of the tile count is a synchronization point per sparse level (≤ 21); allocating
-//! every level at its worst case instead would remove it at a large memory cost.
+//! bandwidth-bound (two reads and one write per parent) and the allocate, link and prefilter passes
+//! read and write consecutive nodes and tiles in consecutive invocations (coalesced; link reads the
+//! parent level's child pointers at Morton-near addresses). The per-level read back of the tile
+//! count is a synchronization point per sparse level (≤ 21); allocating every level at its worst
+//! case instead would remove it at a large memory cost.
 //!
 //! # Limits
 //! Every buffer is checked against the device's binding limit before it is allocated

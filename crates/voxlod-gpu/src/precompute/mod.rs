@@ -131,8 +131,8 @@ pub const LINES_PER_DISPATCH: u64 = 1 << 22;
 /// What [`Precomputer::run`] returns besides the Averages grid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
-    /// Also read back every line as
-    /// [`VoxelSamples`](voxlod_cpu::appearance::samples::VoxelSamples) (80 bytes per line on the device).
+    /// Also read back every line as [`VoxelSamples`](voxlod_cpu::appearance::samples::VoxelSamples)
+    /// (80 bytes per line on the device).
     pub lines: bool,
 }
 

@@ -12,8 +12,9 @@ use crate::{Error, Result};
 
 impl VolumeKernels<'_> {
     /// Fill (§5.5.2) of the metavoxels of `bins` on the GPU: density the sum, colour the max,
-    /// emission kept apart (the CPU's [`voxlod_cpu::volume::fill::fill`] per bin). `prepared`
-    /// is [`Binning::prepared`](voxlod_cpu::volume::binning::Binning::prepared) of the same spheres and spec.
+    /// emission kept apart (the CPU's [`voxlod_cpu::volume::fill::fill`] per bin). `prepared` is
+    /// [`Binning::prepared`](voxlod_cpu::volume::binning::Binning::prepared) of the same spheres
+    /// and spec.
     pub fn fill(
         &self,
         spheres: &[DisplacedSphere],

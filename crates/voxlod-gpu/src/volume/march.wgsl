@@ -1,4 +1,4 @@
-// The eye ray march (seed 001 Listing 5.3, §5.5.5): one invocation per pixel in 8×8
+// The eye ray march (McNabb 2015, Listing 5.3, §5.5.5): one invocation per pixel in 8×8
 // workgroups (neighbouring rays cross the same metavoxels and voxels: coherent reads of the
 // same cache lines). Every pixel walks the host's list of non-empty kept metavoxels in the
 // chapter's sort order — far to near with over blending above the perpendicular, then near to

@@ -62,15 +62,15 @@
 //! workgroup reduction first would cut that traffic on a real GPU.
 //!
 //! # Limits and errors
-//! Input is checked by the CPU's own checks ([`voxlod_cpu::volume::validate_build`]: particles
-//! and light terms; [`voxlod_cpu::volume::check_budget`]: the `max_bytes` budget; the march's
-//! image size, step, camera and depth buffer), so the errors are the very same. Buffers over
-//! the device's limits are [`Error::BufferTooLarge`](crate::Error::BufferTooLarge) with the
-//! numbers; over `2³²` voxels or candidates [`Error::TooLarge`](crate::Error::TooLarge). A
-//! volume lit with [`Attenuation::Exact`](voxlod_cpu::volume::Attenuation::Exact) is marched by the reference
-//! march (`march_exact.wgsl`: every voxel crossed with its exact length, the CPU's
-//! `render_exact`), as the CPU's `render` does. Binning's compaction and sort run on the host (a
-//! GPU prefix-sum compaction and segmented sort would replace them on a real GPU).
+//! Input is checked by the CPU's own checks ([`voxlod_cpu::volume::validate_build`]: particles and
+//! light terms; [`voxlod_cpu::volume::check_budget`]: the `max_bytes` budget; the march's image
+//! size, step, camera and depth buffer), so the errors are the very same. Buffers over the device's
+//! limits are [`Error::BufferTooLarge`](crate::Error::BufferTooLarge) with the numbers; over `2³²`
+//! voxels or candidates [`Error::TooLarge`](crate::Error::TooLarge). A volume lit with
+//! [`Attenuation::Exact`](voxlod_cpu::volume::Attenuation::Exact) is marched by the reference march
+//! (`march_exact.wgsl`: every voxel crossed with its exact length, the CPU's `render_exact`), as
+//! the CPU's `render` does. Binning's compaction and sort run on the host (a GPU prefix-sum
+//! compaction and segmented sort would replace them on a real GPU).
 //!
 //! # Layout of the module
 //! `params` holds the `#[repr(C)]` mirrors of the kernels' WGSL structs; `binning`, `fill`,

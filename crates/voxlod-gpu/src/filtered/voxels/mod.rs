@@ -119,8 +119,9 @@ impl GpuVirtualMesh {
     }
 }
 
-/// One voxel with a record (mirrors the WGSL `vec4<u32>` of `voxels`): grid coordinates, and
-/// its tag (kind in bits 30–31 as [`AdaptiveRef`](voxlod_format::records::AdaptiveRef), index into the kernel's array of that kind).
+/// One voxel with a record (mirrors the WGSL `vec4<u32>` of `voxels`): grid coordinates, and its
+/// tag (kind in bits 30–31 as [`AdaptiveRef`](voxlod_format::records::AdaptiveRef), index into the
+/// kernel's array of that kind).
 pub type GpuVoxel = [u32; 4];
 
 /// The decoder tables: sRGB8 → linear (256), then [`SCALE_RANGE`] codes → semi-axes (256).
