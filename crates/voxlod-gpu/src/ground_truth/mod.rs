@@ -1,4 +1,4 @@
-//! Kernel 3: the ground-truth renderer on the GPU, the mirror of
+//! The ground-truth renderer on the GPU, the mirror of
 //! [`voxlod_cpu::render::ground_truth::render`]: `spp` stratified, jittered camera rays per
 //! pixel through the CWBVH of [`crate::raycast`], each hit shaded with the interpolated
 //! shading normal (flipped toward the viewer on double-sided materials), one shadow ray from
@@ -24,15 +24,16 @@
 //! dispatch.
 //!
 //! # Kernel (what a real GPU sees)
-//! One invocation per pixel in 8×8 workgroups, its rays (camera, shadow, pixel centre) cast
-//! from one call site of the traversal in a loop, because drivers inline every call site (three
-//! copies of the alpha-tested walk and the texture sampling took lavapipe minutes to compile): neighbouring camera rays are coherent, so they
-//! walk the same BVH nodes and share cache lines; shadow rays toward one light are coherent
-//! too. Each dispatch covers a range of samples of every pixel (at most
-//! [`RAYS_PER_DISPATCH`] camera rays in all) and adds them in sample order to a running sum per
-//! pixel, which bounds a dispatch's duration (watchdogs kill long dispatches on desktop GPUs)
-//! and keeps the CPU's summation order. Expected on a real GPU: the cost of the closest-hit
-//! traversal times (1 + shadow rays), divergence growing only at silhouettes and shadow edges.
+//! One invocation per pixel in 8×8 workgroups, its rays (camera, shadow, pixel centre) cast from
+//! one call site of the traversal in a loop, because drivers inline every call site (three copies
+//! of the alpha-tested walk and the texture sampling would triple the shader a driver compiles):
+//! neighbouring camera rays are coherent, so they walk the same BVH nodes and share cache lines;
+//! shadow rays toward one light are coherent too. Each dispatch covers a range of samples of every
+//! pixel (at most [`RAYS_PER_DISPATCH`] camera rays in all) and adds them in sample order to a
+//! running sum per pixel, which bounds a dispatch's duration (watchdogs kill long dispatches on
+//! desktop GPUs) and keeps the CPU's summation order. Expected on a real GPU: the cost of the
+//! closest-hit traversal times (1 + shadow rays), divergence growing only at silhouettes and shadow
+//! edges.
 //!
 //! # Agreement with the CPU (the equivalence suite's bound)
 //! The rays agree up to float rounding (WGSL's division and `normalize` are accurate to a few

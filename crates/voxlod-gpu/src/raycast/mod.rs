@@ -1,4 +1,4 @@
-//! Kernel 2: closest-hit ray casting on the GPU through the CPU-built BVH, the mirror of
+//! Closest-hit ray casting on the GPU through the CPU-built BVH, the mirror of
 //! [`voxlod_cpu::raycast::Bvh::intersect`].
 //!
 //! # Layout
@@ -32,7 +32,6 @@ use voxlod_scene::camera::CameraFrame;
 
 use crate::{Context, Result};
 
-/// The WGSL source of the kernel.
 /// The WGSL source of the kernel: the shared traversal (`bvh.wgsl`, also used by the
 /// ground-truth kernel) followed by the entry point.
 pub const WGSL: &str = concat!(include_str!("../bvh.wgsl"), include_str!("raycast.wgsl"));
