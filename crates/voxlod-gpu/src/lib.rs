@@ -137,6 +137,11 @@ pub mod voxelize;
 pub use context::{AdapterSummary, Context, adapters};
 pub use error::{Error, Result};
 
+/// The README's example, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctest;
+
 /// A light as the kernels' `Params` carry it: whether it is a point light, then `light_a`
 /// (direction toward a directional light, or a point light's position) and `light_b`
 /// (irradiance, or intensity).
