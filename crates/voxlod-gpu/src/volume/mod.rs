@@ -118,9 +118,10 @@ pub const FILL_WGSL: &str = concat!(include_str!("common.wgsl"), include_str!("f
 /// WGSL of the propagation kernel.
 pub const PROPAGATE_WGSL: &str = include_str!("propagate.wgsl");
 /// WGSL of the eye march kernel.
-pub const MARCH_WGSL: &str = include_str!("march.wgsl");
+pub const MARCH_WGSL: &str = concat!(include_str!("march_common.wgsl"), include_str!("march.wgsl"));
 /// WGSL of the exact-attenuation reference march kernel.
-pub const MARCH_EXACT_WGSL: &str = include_str!("march_exact.wgsl");
+pub const MARCH_EXACT_WGSL: &str =
+    concat!(include_str!("march_common.wgsl"), include_str!("march_exact.wgsl"));
 
 /// Invocations per workgroup of the binning, fill and propagation kernels.
 pub const WORKGROUP: u64 = 64;
