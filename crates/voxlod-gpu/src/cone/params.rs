@@ -122,11 +122,10 @@ mod tests {
     use std::mem::offset_of;
 
     use voxlod_cone::RadiancePayload;
-    use voxlod_octree::{GpuLevel, GpuNode, GpuTile};
 
     use super::*;
     use crate::cone::source;
-    use crate::layout::assert_mirrors;
+    use crate::layout::{assert_flat_octree_mirrors, assert_mirrors};
 
     #[test]
     fn cone_types_mirror_their_wgsl() {
@@ -170,25 +169,7 @@ mod tests {
                     ("steps", offset_of!(GpuShade, steps)),
                 ],
             );
-            assert_mirrors(
-                src,
-                "Level",
-                size_of::<GpuLevel>(),
-                &[
-                    ("first", offset_of!(GpuLevel, first)),
-                    ("count", offset_of!(GpuLevel, count)),
-                    ("res_log2", offset_of!(GpuLevel, res_log2)),
-                    ("dense", offset_of!(GpuLevel, dense)),
-                    ("first_tile", offset_of!(GpuLevel, first_tile)),
-                ],
-            );
-            assert_mirrors(
-                src,
-                "Node",
-                size_of::<GpuNode>(),
-                &[("child", offset_of!(GpuNode, child)), ("mask", offset_of!(GpuNode, mask))],
-            );
-            assert_mirrors(src, "Tile", size_of::<GpuTile>(), &[("links", 0)]);
+            assert_flat_octree_mirrors(src, ["Level", "Node", "Tile"]);
         }
         type R = GpuRadiance;
         assert_mirrors(

@@ -10,7 +10,7 @@ use voxlod_format::records::{AverageRecord, SggxRecord, SpecularRecord};
 use voxlod_format::{BrickMap, GridSpec};
 use voxlod_scene::MaterialSample;
 
-use super::{FilteredKernel, GpuRecord, RecordKind, brick_lookup, voxels};
+use super::{FilteredKernel, GpuBrick, GpuRecord, RecordKind, brick_lookup, voxels};
 use crate::{Error, Result};
 
 /// A record grid uploaded to one device.
@@ -119,7 +119,7 @@ impl FilteredKernel<'_> {
                 decode(r, &record_material(r.color(), app.specular.as_ref().map(|s| &s[i])))
             })
             .collect();
-        self.buffers(kind, app.grid, &app.records, records)
+        self.record_buffers(kind, app.grid, brick_lookup(&app.records)?, records)
     }
 
     /// Uploads the baseline renderer's voxels (opaque cubes of one colour) over `grid`, with
@@ -143,18 +143,18 @@ impl FilteredKernel<'_> {
             .iter()
             .map(|v| GpuRecord { a: v.albedo().extend(1.0).to_array(), ..Default::default() })
             .collect();
-        self.buffers(RecordKind::Baseline, *grid, voxels, records)
+        self.record_buffers(RecordKind::Baseline, *grid, brick_lookup(voxels)?, records)
     }
 
-    /// The buffers of `records` laid out as `map`'s values.
-    fn buffers<T>(
+    /// The buffers of a brick look-up ([`brick_lookup`]) and of `records` laid out as its
+    /// values (the per-voxel pass buffers are added by the virtual-mesh and Adaptive uploads).
+    pub(super) fn record_buffers(
         &self,
         kind: RecordKind,
         grid: GridSpec,
-        map: &BrickMap<T>,
+        (table, bricks, slots): (Vec<u32>, Vec<GpuBrick>, Vec<u32>),
         records: Vec<GpuRecord>,
     ) -> Result<GpuRecords> {
-        let (table, bricks, slots) = brick_lookup(map)?;
         let ctx = self.ctx;
         Ok(GpuRecords {
             kind,

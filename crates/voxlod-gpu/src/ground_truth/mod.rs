@@ -296,6 +296,29 @@ fn check(options: &Options, camera: &Camera) -> Result<()> {
     Ok(())
 }
 
+/// Asserts that [`GpuShadeTri`] matches its WGSL mirror `ShadeTri` in `source` (the ground
+/// truth and the precompute read the same shading triangles).
+#[cfg(test)]
+pub(crate) fn assert_shade_tri_mirrors(source: &str) {
+    use std::mem::offset_of;
+
+    crate::layout::assert_mirrors(
+        source,
+        "ShadeTri",
+        size_of::<GpuShadeTri>(),
+        &[
+            ("p0", offset_of!(GpuShadeTri, p0)),
+            ("p1", offset_of!(GpuShadeTri, p1)),
+            ("p2", offset_of!(GpuShadeTri, p2)),
+            ("n0", offset_of!(GpuShadeTri, n0)),
+            ("n1", offset_of!(GpuShadeTri, n1)),
+            ("n2", offset_of!(GpuShadeTri, n2)),
+            ("uv01", offset_of!(GpuShadeTri, uv01)),
+            ("uv2", offset_of!(GpuShadeTri, uv2)),
+        ],
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use std::mem::offset_of;
@@ -352,21 +375,7 @@ mod tests {
                 ("streams", offset_of!(P, streams)),
             ],
         );
-        assert_mirrors(
-            WGSL,
-            "ShadeTri",
-            size_of::<GpuShadeTri>(),
-            &[
-                ("p0", offset_of!(GpuShadeTri, p0)),
-                ("p1", offset_of!(GpuShadeTri, p1)),
-                ("p2", offset_of!(GpuShadeTri, p2)),
-                ("n0", offset_of!(GpuShadeTri, n0)),
-                ("n1", offset_of!(GpuShadeTri, n1)),
-                ("n2", offset_of!(GpuShadeTri, n2)),
-                ("uv01", offset_of!(GpuShadeTri, uv01)),
-                ("uv2", offset_of!(GpuShadeTri, uv2)),
-            ],
-        );
+        assert_shade_tri_mirrors(WGSL);
         assert_mirrors(
             WGSL,
             "GTexel",

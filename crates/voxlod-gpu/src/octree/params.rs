@@ -20,39 +20,16 @@ pub struct GpuOctreeParams {
 mod tests {
     use std::mem::offset_of;
 
-    use voxlod_octree::{AveragePayload, GpuLevel, GpuNode, GpuTile};
+    use voxlod_octree::AveragePayload;
 
     use super::*;
-    use crate::layout::assert_mirrors;
+    use crate::layout::{assert_flat_octree_mirrors, assert_mirrors};
     use crate::octree::KERNELS;
 
     #[test]
     fn octree_types_mirror_their_wgsl() {
         for (_, src) in KERNELS {
-            assert_mirrors(
-                src,
-                "GpuNode",
-                size_of::<GpuNode>(),
-                &[("child", offset_of!(GpuNode, child)), ("mask", offset_of!(GpuNode, mask))],
-            );
-            assert_mirrors(
-                src,
-                "GpuTile",
-                size_of::<GpuTile>(),
-                &[("links", offset_of!(GpuTile, links))],
-            );
-            assert_mirrors(
-                src,
-                "GpuLevel",
-                size_of::<GpuLevel>(),
-                &[
-                    ("first", offset_of!(GpuLevel, first)),
-                    ("count", offset_of!(GpuLevel, count)),
-                    ("res_log2", offset_of!(GpuLevel, res_log2)),
-                    ("dense", offset_of!(GpuLevel, dense)),
-                    ("first_tile", offset_of!(GpuLevel, first_tile)),
-                ],
-            );
+            assert_flat_octree_mirrors(src, ["GpuLevel", "GpuNode", "GpuTile"]);
             assert_mirrors(
                 src,
                 "Average",

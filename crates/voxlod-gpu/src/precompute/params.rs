@@ -148,21 +148,6 @@ mod tests {
                 ("albedo", offset_of!(L, albedo)),
             ],
         );
-        use crate::ground_truth::GpuShadeTri;
-        assert_mirrors(
-            WGSL,
-            "ShadeTri",
-            size_of::<GpuShadeTri>(),
-            &[
-                ("p0", offset_of!(GpuShadeTri, p0)),
-                ("p1", offset_of!(GpuShadeTri, p1)),
-                ("p2", offset_of!(GpuShadeTri, p2)),
-                ("n0", offset_of!(GpuShadeTri, n0)),
-                ("n1", offset_of!(GpuShadeTri, n1)),
-                ("n2", offset_of!(GpuShadeTri, n2)),
-                ("uv01", offset_of!(GpuShadeTri, uv01)),
-                ("uv2", offset_of!(GpuShadeTri, uv2)),
-            ],
-        );
+        crate::ground_truth::assert_shade_tri_mirrors(WGSL);
     }
 }

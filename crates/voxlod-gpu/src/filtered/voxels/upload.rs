@@ -137,7 +137,7 @@ impl FilteredKernel<'_> {
         mut params: [u32; 4],
         a: Arrays,
     ) -> Result<GpuRecords> {
-        let (table, bricks, slots) = brick_lookup(map)?;
+        let lookup = brick_lookup(map)?;
         params[3] = u32::try_from(a.voxels.len()).map_err(|_| Error::TooLarge {
             what: "voxels with a record in a virtual-mesh/Adaptive grid on the GPU",
             requested: a.voxels.len() as u64,
@@ -150,20 +150,14 @@ impl FilteredKernel<'_> {
         let tables = decode_tables();
         let mut tables_bytes = bytemuck::bytes_of(&tables).to_vec();
         tables_bytes.resize(2048, 0);
-        Ok(GpuRecords {
-            kind,
-            grid,
-            table: ctx.storage_array("brick table", &table)?,
-            bricks: ctx.storage_array("brick masks", &bricks)?,
-            slots: ctx.storage_array("record slots", &slots)?,
-            records: ctx.storage_array("Averages/[VJK21] records", &a.records)?,
-            voxels: Some(VoxelBuffers {
-                params,
-                tables: ctx.uniform("decoder tables", &tables_bytes)?,
-                voxels: ctx.storage_array("voxel coordinates and tags", &a.voxels)?,
-                vmesh: ctx.storage_array("virtual-mesh records", &a.vmesh)?,
-            }),
-        })
+        let mut records = self.record_buffers(kind, grid, lookup, a.records)?;
+        records.voxels = Some(VoxelBuffers {
+            params,
+            tables: ctx.uniform("decoder tables", &tables_bytes)?,
+            voxels: ctx.storage_array("voxel coordinates and tags", &a.voxels)?,
+            vmesh: ctx.storage_array("virtual-mesh records", &a.vmesh)?,
+        });
+        Ok(records)
     }
 }
 
