@@ -2,30 +2,31 @@
 //! 2023, §3.3–3.4; [`VirtualMeshGrid`]) and **Adaptive** grids ([`AdaptiveGrid`]: each voxel an
 //! Averages, \[VJK21\] or virtual-mesh record), the mirror of
 //! [`voxlod_cpu::render::filtered::render`] over them: the same camera rays, DDA, compositing,
-//! shadow rays and shading as the first part (see [the parent module](super)), with `vmesh.wgsl`
-//! porting [`voxlod_cpu::appearance::vmesh::shade_record`] (the projected-area-weighted faces, the
-//! fixed Hammersley barycentric samples of distribution faces, the fallback) and
-//! [`voxlod_cpu::appearance::subgrid::directional_opacity`] (both rules, Lines and Circles), times
+//! shadow rays and shading as the single-pass kernel of [the parent module](super), with
+//! `vmesh.wgsl` porting [`voxlod_cpu::appearance::vmesh::shade_record`] (the
+//! projected-area-weighted faces, the fixed Hammersley barycentric samples of distribution faces,
+//! the fallback) and [`voxlod_cpu::appearance::subgrid::directional_opacity`] (both rules, Lines
+//! and Circles), times
 //! [`projected_area_ratio`](voxlod_cpu::appearance::vmesh::projected_area_ratio) when
 //! [`VirtualMeshParams::projected_area`] is on. No random numbers are drawn: the CPU's virtual-mesh
 //! shading samples fixed barycentric points (`barycentric_point`) and its Lines rule a fixed
 //! pattern, so both backends evaluate the same points in the same order.
 //!
 //! # Data on the GPU
-//! The brick look-up of the parent module; the virtual-mesh records in their frozen 136-byte
-//! layout ([`GpuVirtualMesh`]: the record's bytes as 34 words, decoded in the shader, plus
-//! the voxel's specular level and exponent), the sRGB and semi-axis decoders as 512-entry
-//! tables made by voxlod-format's own decoders (the shader then decodes bit-identically to
-//! the host); Averages and \[VJK21\] records of an Adaptive grid decoded on the host as in the
-//! first part. Per voxel a [`GpuVoxel`] (grid coordinates and the tag: kind in the top 2 bits,
-//! index into its kind's array below) and, per frame, 32 bytes of cached values.
+//! The brick look-up of the parent module; the virtual-mesh records in their frozen 136-byte layout
+//! ([`GpuVirtualMesh`]: the record's bytes as 34 words, decoded in the shader, plus the voxel's
+//! specular level and exponent), the sRGB and semi-axis decoders as 512-entry tables made by
+//! voxlod-format's own decoders (the shader then decodes bit-identically to the host); Averages and
+//! \[VJK21\] records of an Adaptive grid decoded on the host as in the single-pass kernel. Per
+//! voxel a [`GpuVoxel`] (grid coordinates and the tag: kind in the top 2 bits, index into its
+//! kind's array below) and, per frame, 32 bytes of cached values.
 //!
 //! # Kernel (what a real GPU sees)
-//! A virtual-mesh voxel costs far more than the others to evaluate: up to 8 faces × 16
-//! samples of the shading function, and 32 lines × 27 slab overlaps (or 16 pixels × 27 lens
-//! areas) for one directional opacity. Evaluating per hit, as the first part does, would
-//! repeat that for each of the up to 4 × pixels camera rays reaching a voxel, and the light
-//! opacity for every shadow-ray step. So a frame is three dispatches:
+//! A virtual-mesh voxel costs far more than the others to evaluate: up to 8 faces × 16 samples of
+//! the shading function, and 32 lines × 27 slab overlaps (or 16 pixels × 27 lens areas) for one
+//! directional opacity. Evaluating per hit, as the single-pass kernel does, would repeat that for
+//! each of the up to 4 × pixels camera rays reaching a voxel, and the light opacity for every
+//! shadow-ray step. So a frame is three dispatches:
 //! 1. `light_pass`, one invocation per voxel (workgroups of 64): the voxel's opacity for the
 //!    direction the light travels at its centre;
 //! 2. `view_pass`, one invocation per voxel: its shadow ray (reading pass 1's opacities), its
@@ -33,28 +34,27 @@
 //! 3. `composite`, one invocation per pixel in 8×8 workgroups: the 4 camera rays composite
 //!    the cached values.
 //!
-//! Each value is a function of the voxel alone, so it equals what the CPU caches lazily for
-//! the voxels its rays reach (the CPU reference row of the suite checks that its cache equals
-//! per-ray evaluation). The passes evaluate every voxel, visible or not: on a real GPU that is
-//! one coherent pass over a flat array (neighbouring invocations are neighbouring voxels in
-//! Morton order, so their shadow rays cross the same bricks), and the visible voxels of a
-//! surface grid are a large share of all (a camera ray composites ~2–4 voxels and the 4 rays
-//! of a pixel share most of them, so at image size ≈ grid size per-hit evaluation does more
-//! work). Divergence: the record kind switches per voxel in an Adaptive grid (a warp of mixed
-//! kinds runs each branch), and the virtual mesh's loops are bounded (8 faces, ≤
-//! [`MAX_SAMPLES_PER_FACE`] samples, 32 lines, 27 cells) but their trip counts differ between
-//! records (visible faces, distribution flags, early-out of Lines on opaque cells). Memory
-//! per virtual-mesh record read is 144 bytes, read once per pass and kept in registers.
-//! Expected on a real GPU: the view pass dominates (shadow walks and the shading samples);
-//! the composite pass is the first part's walk with no evaluation. On lavapipe, a CPU
-//! implementation, timings are CPU timings of the GPU path, never GPU speed.
+//! Each value is a function of the voxel alone, so it equals what the CPU caches lazily for the
+//! voxels its rays reach (the CPU reference row of the suite checks that its cache equals per-ray
+//! evaluation). The passes evaluate every voxel, visible or not: on a real GPU that is one coherent
+//! pass over a flat array (neighbouring invocations are neighbouring voxels in Morton order, so
+//! their shadow rays cross the same bricks), and the visible voxels of a surface grid are a large
+//! share of all (a camera ray composites ~2–4 voxels and the 4 rays of a pixel share most of them,
+//! so at image size ≈ grid size per-hit evaluation does more work). Divergence: the record kind
+//! switches per voxel in an Adaptive grid (a warp of mixed kinds runs each branch), and the virtual
+//! mesh's loops are bounded (8 faces, ≤ [`MAX_SAMPLES_PER_FACE`] samples, 32 lines, 27 cells) but
+//! their trip counts differ between records (visible faces, distribution flags, early-out of Lines
+//! on opaque cells). Memory per virtual-mesh record read is 144 bytes, read once per pass and kept
+//! in registers. Expected on a real GPU: the view pass dominates (shadow walks and the shading
+//! samples); the composite pass is the single-pass kernel's walk with no evaluation. On lavapipe, a
+//! CPU implementation, timings are CPU timings of the GPU path, never GPU speed.
 //!
 //! # Agreement with the CPU
-//! As for the first part, plus: WGSL's `sqrt`, `acos` (Circles) and division are within a
-//! few ULP, so a barycentric sample normal, a lens area or a slab crossing can differ in the
-//! last bits. A Lines crossing that lands within an ULP of a sub-cell boundary can add or
-//! drop a sub-cell (a step of `1/32` of that cell's opacity at most, per line); everything
-//! else moves a radiance by ~10⁻⁶ relative. The equivalence suite states the bound.
+//! As for the single-pass kernel, plus: WGSL's `sqrt`, `acos` (Circles) and division are within a
+//! few ULP, so a barycentric sample normal, a lens area or a slab crossing can differ in the last
+//! bits. A Lines crossing that lands within an ULP of a sub-cell boundary can add or drop a
+//! sub-cell (a step of `1/32` of that cell's opacity at most, per line); everything else moves a
+//! radiance by ~10⁻⁶ relative. The equivalence suite states the bound.
 
 //!
 //! # Layout of the module
@@ -75,7 +75,7 @@ mod upload;
 
 pub(super) use passes::Passes;
 
-/// The WGSL source of the per-voxel passes: shading, the first part's renderer (its
+/// The WGSL source of the per-voxel passes: shading, the single-pass renderer (its
 /// parameters, DDA, look-up and \[VJK21\] code), the virtual mesh, then the passes.
 pub const WGSL: &str = concat!(
     include_str!("../../shading.wgsl"),
