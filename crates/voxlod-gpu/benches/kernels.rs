@@ -30,16 +30,12 @@
 //!   `Octree::build` + `FlatOctree::from_octree`, and the emulated lock-free build
 //!   `FlatOctree::build_level_by_level` (rayon, all cores); GPU: `OctreeBuilder::build_buffers`
 //!   (upload, build, no readback) and `OctreeBuilder::build` (with the readback). On lavapipe
-//!   these are CPU timings of the GPU path. First figures (2026-11-24, 2 cores shared with
-//!   four other builds, so load-dominated and noisy: the build without readback measured
-//!   slower than the one with it): reference/cpu 408 ms, level-by-level/cpu 471 ms,
-//!   gpu-path 2.09 s without and 1.35 s with the readback (criterion medians, 10 samples).
+//!   these are CPU timings of the GPU path.
 //! - `precompute`: the Averages precompute of the bunny at 64³ (150 lines per voxel): CPU
 //!   reference `voxlod_cpu::appearance::precompute::precompute` with `averages::fit` (rayon,
 //!   all cores) against `voxlod_gpu::precompute::Precomputer::run` (host preparation of the
 //!   voxels' local triangles, uploads, dispatches, readback and the host fit from the sums);
-//!   throughput in lines. Measured on llvmpipe with 2 cores shared with other builds: CPU
-//!   0.40 s, GPU path 6.8 s.
+//!   throughput in lines.
 //! - `cone`: cone tracing (voxlod-cone's `ConeTracer` vs voxlod-gpu's cone kernel) of a
 //!   1280×720 frame on builtin:cornell — 6 diffuse cones of 30° (AO and `E/π` from the same
 //!   marches, AO radius 0.1 of the scene's diagonal) and 1 specular cone (glossiness 0.5) per
@@ -47,12 +43,9 @@
 //!   32 lines per voxel, light injected with marched shadows); CPU reference on rayon (all
 //!   cores); GPU with the octree already uploaded (the call uploads the shading points,
 //!   dispatches and reads back). `VOXLOD_BENCH_ONCE=1` times one frame of each path and
-//!   skips criterion's ten samples (a frame takes minutes on lavapipe). Measured that way
-//!   once, 2026-11-24, on 2 cores shared with other builds (under load: the figures are
-//!   indicative only): CPU reference 63.7 s per frame, GPU path on lavapipe 188 s per frame
-//!   (CPU time of the GPU path; 192 s for the first frame, which compiles the kernel); the
-//!   two frames agree to 2.1e-5 (largest |ΔAO| or |ΔE/π| channel).
-//! - `volume`: the metavoxel pipeline (seed 001) on the smoke preset (2000 particles) at 64³
+//!   skips criterion's ten samples (a frame takes minutes on lavapipe) and prints how far the
+//!   two frames agree (largest |ΔAO| or |ΔE/π| channel).
+//! - `volume`: the metavoxel pipeline (McNabb 2015) on the smoke preset (2000 particles) at 64³
 //!   voxels, M = 16, 128×128 pixels, Beer–Lambert: each stage on its own (binning; fill of the
 //!   binned metavoxels; propagation, the fill included as its input; march of the built volume)
 //!   and the whole frame, CPU reference (rayon, all cores) against the GPU path (uploads,
@@ -66,16 +59,30 @@ use std::path::Path;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{UVec3, Vec3};
 use voxlod_cpu::raycast::Bvh;
+use voxlod_cpu::voxelize::Voxelization;
 use voxlod_cpu::voxelize::{Mode, Options};
 use voxlod_format::GridSpec;
 use voxlod_gpu::Context;
 use voxlod_gpu::raycast::{RayCaster, primary_rays};
 use voxlod_gpu::voxelize::{VoxelizeOptions, Voxelizer};
-use voxlod_scene::{Camera, Geometry};
+use voxlod_scene::{Camera, Geometry, Scene};
+
+fn bunny_scene() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
+    Scene::load(&path).expect("bunny")
+}
 
 fn bunny() -> Geometry {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
-    voxlod_scene::Scene::load(&path).expect("bunny").geometry()
+    bunny_scene().geometry()
+}
+
+/// `scene`'s geometry, a 64-voxel grid fitted to it and its conservative voxelization.
+fn voxelized_64(scene: &Scene) -> (Geometry, GridSpec, Voxelization) {
+    let g = scene.geometry();
+    let (lo, hi) = scene.bounds().unwrap();
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
+    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Default::default()).unwrap();
+    (g, grid, vox)
 }
 
 fn forest() -> Geometry {
@@ -196,12 +203,8 @@ fn filtered(c: &mut Criterion) {
     use voxlod_cpu::render::filtered::{FrameCache, Options, render};
     use voxlod_gpu::filtered::FilteredKernel;
     let ctx = context();
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
-    let scene = voxlod_scene::Scene::load(&path).expect("bunny");
-    let g = scene.geometry();
-    let (lo, hi) = scene.bounds().unwrap();
-    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
-    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Default::default()).unwrap();
+    let scene = bunny_scene();
+    let (g, _, vox) = voxelized_64(&scene);
     let sampling = SamplingContext::new(&scene, &g, &vox).unwrap();
     let opts = PrecomputeOptions { rays: 32, seed: 0 };
     let avg = precompute(&sampling, &opts, averages::fit).unwrap();
@@ -328,12 +331,8 @@ fn precompute(c: &mut Criterion) {
     use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
     use voxlod_gpu::precompute::{Outputs, Precomputer};
     let ctx = context();
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj");
-    let scene = voxlod_scene::Scene::load(&path).expect("bunny");
-    let g = scene.geometry();
-    let (lo, hi) = scene.bounds().unwrap();
-    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
-    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Default::default()).unwrap();
+    let scene = bunny_scene();
+    let (g, _, vox) = voxelized_64(&scene);
     let sampling = SamplingContext::new(&scene, &g, &vox).unwrap();
     let opts = PrecomputeOptions::default();
     let mut group = c.benchmark_group("precompute_averages_bunny64_150");
@@ -366,8 +365,7 @@ fn cone(c: &mut Criterion) {
     let bvh = Bvh::new(&g).unwrap();
     let camera = scene.default_camera().unwrap();
     let (lo, hi) = scene.bounds().unwrap();
-    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 64).unwrap();
-    let vox = voxlod_cpu::voxelize::voxelize(&g, &grid, &Options::default()).unwrap();
+    let (_, grid, vox) = voxelized_64(&scene);
     let sampling = SamplingContext::new(&scene, &g, &vox).unwrap();
     let records =
         precompute(&sampling, &PrecomputeOptions { rays: 32, seed: 0 }, averages::fit).unwrap();

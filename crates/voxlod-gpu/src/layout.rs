@@ -31,6 +31,35 @@ pub fn assert_mirrors(source: &str, name: &str, size: usize, offsets: &[(&str, u
     assert_eq!(members, offsets, "members and offsets of WGSL struct {name} vs its Rust mirror");
 }
 
+/// Asserts that voxlod-octree's flat-layout types match their WGSL mirrors in `source`, named
+/// `[level, node, tile]` there (`GpuLevel`, `GpuNode`, `GpuTile` in Rust): the octree-build
+/// kernels and the cone kernel read the same arrays.
+#[cfg(test)]
+pub(crate) fn assert_flat_octree_mirrors(source: &str, [level, node, tile]: [&str; 3]) {
+    use std::mem::offset_of;
+
+    use voxlod_octree::{GpuLevel, GpuNode, GpuTile};
+    assert_mirrors(
+        source,
+        level,
+        size_of::<GpuLevel>(),
+        &[
+            ("first", offset_of!(GpuLevel, first)),
+            ("count", offset_of!(GpuLevel, count)),
+            ("res_log2", offset_of!(GpuLevel, res_log2)),
+            ("dense", offset_of!(GpuLevel, dense)),
+            ("first_tile", offset_of!(GpuLevel, first_tile)),
+        ],
+    );
+    assert_mirrors(
+        source,
+        node,
+        size_of::<GpuNode>(),
+        &[("child", offset_of!(GpuNode, child)), ("mask", offset_of!(GpuNode, mask))],
+    );
+    assert_mirrors(source, tile, size_of::<GpuTile>(), &[("links", offset_of!(GpuTile, links))]);
+}
+
 #[cfg(test)]
 mod tests {
     use std::mem::offset_of;

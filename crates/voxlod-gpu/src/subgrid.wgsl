@@ -55,3 +55,22 @@ fn crossed_subcells(e: vec3<f32>, d: vec3<f32>, chord: f32) -> u32 {
     }
     return mask;
 }
+
+// sampler/lines.rs chord: the length of the line e + t·d, t ≥ 0, inside the unit voxel; an axis
+// with d = 0 never ends the chord. Uses the includer's F32_MAX (f32::MAX).
+fn chord_of(e: vec3<f32>, d: vec3<f32>) -> f32 {
+    var t = F32_MAX;
+    var ends = false;
+    for (var j = 0u; j < 3u; j++) {
+        if d[j] == 0.0 {
+            continue;
+        }
+        let inv = 1.0 / d[j];
+        t = min(t, max(-e[j] * inv, (1.0 - e[j]) * inv));
+        ends = true;
+    }
+    if !ends || !(abs(t) <= F32_MAX) {
+        return 0.0;
+    }
+    return max(t, 0.0);
+}

@@ -1,11 +1,11 @@
 // The filtered voxel renderer for Averages and [VJK21] (SGGX) records (voxlod-cpu's
-// render::filtered with appearance::averages, appearance::sggx and appearance::transmittance),
-// and the baseline renderer of opaque voxels (render::baseline), appended to shading.wgsl. One invocation per pixel in 8×8 tiles; each
-// pixel sends the 4 rays of PATTERN_4 through the grid with the DDA of render/dda.rs (the same
-// plane expression, tie rule and clipping), composites the voxels with a record front to back
-// until T < 0.001, and evaluates every voxel it meets per hit: radiance and opacity for the
-// voxel-centre-to-camera direction, and the voxel's shadow ray, are functions of the voxel
-// alone, so they equal the CPU's cached values (see mod.rs).
+// render::filtered with appearance::averages, appearance::sggx and appearance::transmittance), and
+// the baseline renderer of opaque voxels (render::baseline), appended to shading.wgsl. One
+// invocation per pixel in 8×8 tiles; each pixel sends the 4 rays of PATTERN_4 through the grid with
+// the DDA of render/dda.rs (the same plane expression, tie rule and clipping), composites the
+// voxels with a record front to back until T < 0.001, and evaluates every voxel it meets per hit:
+// radiance and opacity for the voxel-centre-to-camera direction, and the voxel's shadow ray, are
+// functions of the voxel alone, so they equal the CPU's cached values (see mod.rs).
 
 struct Params {
     eye: vec4<f32>,

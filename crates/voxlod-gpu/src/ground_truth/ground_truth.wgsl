@@ -1,8 +1,8 @@
 // The ground-truth renderer (voxlod-cpu's render::ground_truth + render::surface), appended to
-// random.wgsl, shading.wgsl, material.wgsl, bvh.wgsl and bvh_alpha.wgsl. One invocation per pixel in 8×8 tiles (neighbouring
-// rays walk the same BVH nodes); a dispatch covers samples [first, end) of every pixel and adds
-// them, in sample order, to the pixel's running sum, so a dispatch's length is bounded whatever
-// the samples per pixel and the sum's order is the CPU's.
+// random.wgsl, shading.wgsl, material.wgsl, bvh.wgsl and bvh_alpha.wgsl. One invocation per pixel
+// in 8×8 tiles (neighbouring rays walk the same BVH nodes); a dispatch covers samples [first, end)
+// of every pixel and adds them, in sample order, to the pixel's running sum, so a dispatch's length
+// is bounded whatever the samples per pixel and the sum's order is the CPU's.
 
 struct Params {
     eye: vec4<f32>,

@@ -1,4 +1,4 @@
-//! Kernel 3: the ground-truth renderer on the GPU, the mirror of
+//! The ground-truth renderer on the GPU, the mirror of
 //! [`voxlod_cpu::render::ground_truth::render`]: `spp` stratified, jittered camera rays per
 //! pixel through the CWBVH of [`crate::raycast`], each hit shaded with the interpolated
 //! shading normal (flipped toward the viewer on double-sided materials), one shadow ray from
@@ -24,15 +24,16 @@
 //! dispatch.
 //!
 //! # Kernel (what a real GPU sees)
-//! One invocation per pixel in 8×8 workgroups, its rays (camera, shadow, pixel centre) cast
-//! from one call site of the traversal in a loop, because drivers inline every call site (three
-//! copies of the alpha-tested walk and the texture sampling took lavapipe minutes to compile): neighbouring camera rays are coherent, so they
-//! walk the same BVH nodes and share cache lines; shadow rays toward one light are coherent
-//! too. Each dispatch covers a range of samples of every pixel (at most
-//! [`RAYS_PER_DISPATCH`] camera rays in all) and adds them in sample order to a running sum per
-//! pixel, which bounds a dispatch's duration (watchdogs kill long dispatches on desktop GPUs)
-//! and keeps the CPU's summation order. Expected on a real GPU: the cost of the closest-hit
-//! traversal times (1 + shadow rays), divergence growing only at silhouettes and shadow edges.
+//! One invocation per pixel in 8×8 workgroups, its rays (camera, shadow, pixel centre) cast from
+//! one call site of the traversal in a loop, because drivers inline every call site (three copies
+//! of the alpha-tested walk and the texture sampling would triple the shader a driver compiles):
+//! neighbouring camera rays are coherent, so they walk the same BVH nodes and share cache lines;
+//! shadow rays toward one light are coherent too. Each dispatch covers a range of samples of every
+//! pixel (at most [`RAYS_PER_DISPATCH`] camera rays in all) and adds them in sample order to a
+//! running sum per pixel, which bounds a dispatch's duration (watchdogs kill long dispatches on
+//! desktop GPUs) and keeps the CPU's summation order. Expected on a real GPU: the cost of the
+//! closest-hit traversal times (1 + shadow rays), divergence growing only at silhouettes and shadow
+//! edges.
 //!
 //! # Agreement with the CPU (the equivalence suite's bound)
 //! The rays agree up to float rounding (WGSL's division and `normalize` are accurate to a few
@@ -52,7 +53,7 @@ use voxlod_cpu::render::pixel_samples::Streams;
 use voxlod_scene::{AlphaMode, Camera, Geometry, Image, Light, Scene};
 
 use crate::material::{MaterialBuffers, gpu_materials};
-use crate::raycast::{GpuBvh, entry, upload_bvh};
+use crate::raycast::{GpuBvh, upload_bvh};
 use crate::{Context, Error, Result, light_words};
 
 /// The WGSL source of the kernel: RNG, shading, BVH traversal, then the renderer.
@@ -226,7 +227,6 @@ impl<'a> GroundTruthKernel<'a> {
         let flags =
             u32::from(shadows) | if point { 2 } else { 0 } | if scene.any_alpha { 4 } else { 0 };
         let per_dispatch = (self.rays_per_dispatch / pixels).clamp(1, spp as u64) as u32;
-        let layout = self.pipeline.get_bind_group_layout(0);
         let mut first = 0;
         while first < spp {
             let end = first.saturating_add(per_dispatch).min(spp);
@@ -249,31 +249,18 @@ impl<'a> GroundTruthKernel<'a> {
                 ],
             };
             let uniform = ctx.uniform("ground-truth params", bytemuck::bytes_of(&params))?;
-            let bind = ctx.guarded("binding ground-truth buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("ground truth"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &scene.bvh.nodes),
-                        entry(2, &scene.bvh.tris),
-                        entry(3, &scene.shade_tris),
-                        entry(4, &scene.materials.materials),
-                        entry(5, &sums),
-                        entry(6, &gbuffer),
-                        entry(7, &scene.materials.textures),
-                        entry(8, &scene.materials.texels),
-                    ],
-                })
-            })?;
-            let mut encoder = ctx.device().create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(lx, ly, 1);
-            }
-            ctx.submit("rendering the ground truth", encoder)?;
+            let buffers = [
+                &uniform,
+                &scene.bvh.nodes,
+                &scene.bvh.tris,
+                &scene.shade_tris,
+                &scene.materials.materials,
+                &sums,
+                &gbuffer,
+                &scene.materials.textures,
+                &scene.materials.texels,
+            ];
+            ctx.dispatch("rendering the ground truth", &self.pipeline, &buffers, (lx, ly))?;
             first = end;
         }
         let raw = ctx.read(&sums, bytes)?;
@@ -307,6 +294,29 @@ fn check(options: &Options, camera: &Camera) -> Result<()> {
     }
     camera.validate().map_err(voxlod_cpu::Error::from)?;
     Ok(())
+}
+
+/// Asserts that [`GpuShadeTri`] matches its WGSL mirror `ShadeTri` in `source` (the ground
+/// truth and the precompute read the same shading triangles).
+#[cfg(test)]
+pub(crate) fn assert_shade_tri_mirrors(source: &str) {
+    use std::mem::offset_of;
+
+    crate::layout::assert_mirrors(
+        source,
+        "ShadeTri",
+        size_of::<GpuShadeTri>(),
+        &[
+            ("p0", offset_of!(GpuShadeTri, p0)),
+            ("p1", offset_of!(GpuShadeTri, p1)),
+            ("p2", offset_of!(GpuShadeTri, p2)),
+            ("n0", offset_of!(GpuShadeTri, n0)),
+            ("n1", offset_of!(GpuShadeTri, n1)),
+            ("n2", offset_of!(GpuShadeTri, n2)),
+            ("uv01", offset_of!(GpuShadeTri, uv01)),
+            ("uv2", offset_of!(GpuShadeTri, uv2)),
+        ],
+    );
 }
 
 #[cfg(test)]
@@ -365,21 +375,7 @@ mod tests {
                 ("streams", offset_of!(P, streams)),
             ],
         );
-        assert_mirrors(
-            WGSL,
-            "ShadeTri",
-            size_of::<GpuShadeTri>(),
-            &[
-                ("p0", offset_of!(GpuShadeTri, p0)),
-                ("p1", offset_of!(GpuShadeTri, p1)),
-                ("p2", offset_of!(GpuShadeTri, p2)),
-                ("n0", offset_of!(GpuShadeTri, n0)),
-                ("n1", offset_of!(GpuShadeTri, n1)),
-                ("n2", offset_of!(GpuShadeTri, n2)),
-                ("uv01", offset_of!(GpuShadeTri, uv01)),
-                ("uv2", offset_of!(GpuShadeTri, uv2)),
-            ],
-        );
+        assert_shade_tri_mirrors(WGSL);
         assert_mirrors(
             WGSL,
             "GTexel",

@@ -36,7 +36,6 @@ use glam::{Vec2, Vec4};
 use voxlod_format::records::quant::srgb_to_linear_table;
 use voxlod_scene::{AlphaMode, Scene, WrapMode};
 
-use crate::raycast::entry;
 use crate::{Context, Error, Result};
 
 /// The WGSL of materials and textures (needs the includer's `materials`, `textures` and
@@ -247,29 +246,9 @@ impl<'a> MaterialKernel<'a> {
         let bytes = n * 32;
         let output = ctx.storage_zeroed("material results", bytes)?;
         let (x, y) = ctx.dispatch_size("material probe workgroups", n.div_ceil(64))?;
-        let layout = self.pipeline.get_bind_group_layout(0);
-        let bind = ctx.guarded("binding material buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("material probe"),
-                layout: &layout,
-                entries: &[
-                    entry(0, &uniform),
-                    entry(1, &buffers.materials),
-                    entry(2, &buffers.textures),
-                    entry(3, &buffers.texels),
-                    entry(4, &input),
-                    entry(5, &output),
-                ],
-            })
-        })?;
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
-        ctx.submit("evaluating materials", encoder)?;
+        let bound =
+            [&uniform, &buffers.materials, &buffers.textures, &buffers.texels, &input, &output];
+        ctx.dispatch("evaluating materials", &self.pipeline, &bound, (x, y))?;
         let raw = ctx.read(&output, bytes)?;
         let out: &[[f32; 4]] = bytemuck::cast_slice(&raw);
         Ok(out

@@ -106,24 +106,6 @@ fn sin_cos_turns(u: f32) -> vec2<f32> {
     return vec2<f32>(bitcast<f32>(s1 ^ flip), bitcast<f32>(c1 ^ flip));
 }
 
-// sampler/lines.rs chord: an axis with d = 0 never ends the chord.
-fn chord_of(e: vec3<f32>, d: vec3<f32>) -> f32 {
-    var t = F32_MAX;
-    var ends = false;
-    for (var j = 0u; j < 3u; j++) {
-        if d[j] == 0.0 {
-            continue;
-        }
-        let inv = 1.0 / d[j];
-        t = min(t, max(-e[j] * inv, (1.0 - e[j]) * inv));
-        ends = true;
-    }
-    if !ends || !(abs(t) <= F32_MAX) {
-        return 0.0;
-    }
-    return max(t, 0.0);
-}
-
 struct Line {
     d: vec3<f32>,
     e: vec3<f32>,

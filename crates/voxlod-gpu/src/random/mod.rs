@@ -60,26 +60,8 @@ impl<'a> RandomKernel<'a> {
         let bytes = n * 16;
         let output = ctx.storage_zeroed("random outputs", bytes)?;
         let (x, y) = ctx.dispatch_size("random workgroups", n.div_ceil(64))?;
-        let layout = self.pipeline.get_bind_group_layout(0);
-        let bind = ctx.guarded("binding random buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("random"),
-                layout: &layout,
-                entries: &[
-                    crate::raycast::entry(0, &uniform),
-                    crate::raycast::entry(1, &input),
-                    crate::raycast::entry(2, &output),
-                ],
-            })
-        })?;
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
-        ctx.submit("drawing random numbers", encoder)?;
+        let buffers = [&uniform, &input, &output];
+        ctx.dispatch("drawing random numbers", &self.pipeline, &buffers, (x, y))?;
         Ok(bytemuck::cast_slice(&ctx.read(&output, bytes)?).to_vec())
     }
 }

@@ -1,4 +1,4 @@
-//! Kernel 2: closest-hit ray casting on the GPU through the CPU-built BVH, the mirror of
+//! Closest-hit ray casting on the GPU through the CPU-built BVH, the mirror of
 //! [`voxlod_cpu::raycast::Bvh::intersect`].
 //!
 //! # Layout
@@ -32,7 +32,6 @@ use voxlod_scene::camera::CameraFrame;
 
 use crate::{Context, Result};
 
-/// The WGSL source of the kernel.
 /// The WGSL source of the kernel: the shared traversal (`bvh.wgsl`, also used by the
 /// ground-truth kernel) followed by the entry point.
 pub const WGSL: &str = concat!(include_str!("../bvh.wgsl"), include_str!("raycast.wgsl"));
@@ -275,7 +274,6 @@ impl<'a> RayCaster<'a> {
         let binding = ctx.limits().max_storage_buffer_binding_size;
         let per = (binding / size_of::<GpuRay>() as u64).clamp(1, RAYS_PER_DISPATCH) as usize;
         let mut out = Vec::with_capacity(rays.len());
-        let layout = self.pipeline.get_bind_group_layout(0);
         for chunk in rays.chunks(per) {
             let n = chunk.len() as u64;
             let params = GpuRaycastParams { counts: [chunk.len() as u32, bvh.node_count, 0, 0] };
@@ -284,36 +282,12 @@ impl<'a> RayCaster<'a> {
             let hit_bytes = n * size_of::<GpuHit>() as u64;
             let hits = ctx.storage_zeroed("hits", hit_bytes)?;
             let (x, y) = ctx.dispatch_size("raycast workgroups", n.div_ceil(64))?;
-            let bind = ctx.guarded("binding raycast buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("raycast"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &bvh.nodes),
-                        entry(2, &bvh.tris),
-                        entry(3, &ray_buf),
-                        entry(4, &hits),
-                    ],
-                })
-            })?;
-            let mut encoder = ctx.device().create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            ctx.submit("casting rays", encoder)?;
+            let buffers = [&uniform, &bvh.nodes, &bvh.tris, &ray_buf, &hits];
+            ctx.dispatch("casting rays", &self.pipeline, &buffers, (x, y))?;
             out.extend_from_slice(bytemuck::cast_slice(&ctx.read(&hits, hit_bytes)?));
         }
         Ok(out)
     }
-}
-
-/// A bind group entry binding all of `buffer`.
-pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 
 #[cfg(test)]

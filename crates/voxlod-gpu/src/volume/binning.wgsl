@@ -1,4 +1,4 @@
-// Binning (seed 001 Listing 5.1): one invocation per (particle, candidate metavoxel). The host
+// Binning (McNabb 2015, Listing 5.1): one invocation per (particle, candidate metavoxel). The host
 // lists each particle's candidate metavoxels (the CPU reference's per-axis metavoxel ranges,
 // computed by the same Rust code) and their prefix sum; an invocation finds its particle by
 // binary search over the prefix sum (neighbours read the same entries: coherent), decodes its

@@ -1,5 +1,5 @@
 
-// Fill (seed 001 §5.5.2): one invocation per voxel of the kept metavoxels, 64 per workgroup
+// Fill (McNabb 2015, §5.5.2): one invocation per voxel of the kept metavoxels, 64 per workgroup
 // along x (a row: neighbouring invocations write neighbouring voxels, coalesced). Each voxel
 // walks its metavoxel's bin in particle order (the same list for the whole workgroup, so the
 // particle loads are broadcasts and the loop trip count is uniform), with the CPU reference's

@@ -1,29 +1,12 @@
-// The eye ray march (seed 001 Listing 5.3, §5.5.5): one invocation per pixel in 8×8
+// The eye ray march (McNabb 2015, Listing 5.3, §5.5.5): one invocation per pixel in 8×8
 // workgroups (neighbouring rays cross the same metavoxels and voxels: coherent reads of the
 // same cache lines). Every pixel walks the host's list of non-empty kept metavoxels in the
 // chapter's sort order — far to near with over blending above the perpendicular, then near to
 // far with under blending below it — and marches its segment through each one's marched box
 // with the CPU reference's sample positions `t = (n + ½)·step` and nearest-voxel reads,
 // stopping at the pixel's depth. The list is uniform across the workgroup (no divergence in
-// the outer loop); rays that miss a metavoxel's box skip it after the slab test.
-
-struct Params {
-    eye: vec4<f32>,
-    forward: vec4<f32>,
-    right: vec4<f32>,
-    up: vec4<f32>,
-    // The light-space frame: origin (w: voxel size), u, v, w.
-    origin: vec4<f32>,
-    u: vec4<f32>,
-    v: vec4<f32>,
-    w: vec4<f32>,
-    // The eye in voxel coordinates (xyz), w: the step in world units.
-    eye_voxel: vec4<f32>,
-    // x: width, y: height, z: entries in `order`, w: M.
-    dims: vec4<u32>,
-    // x: attenuation (0 chapter, 1 Beer-Lambert), y: 1 if `depth` is a depth buffer.
-    mode: vec4<u32>,
-}
+// the outer loop); rays that miss a metavoxel's box skip it after the slab test. Appended to
+// march_common.wgsl (the parameters, the voxel, depth and image bindings, the slab test).
 
 // One metavoxel in sort order: its box (base, base + M) and the box marched (lo, hi); x of
 // `flags`: the slot (its voxels start at slot · M³), y: 1 for over blending.
@@ -34,26 +17,13 @@ struct Entry {
     flags: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> order: array<Entry>;
-@group(0) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> depth: array<f32>;
-@group(0) @binding(4) var<storage, read_write> image: array<vec4<f32>>;
 
 fn transmittance(tau: f32) -> f32 {
     if params.mode.x == 0u {
         return 1.0 / (1.0 + tau);
     }
     return exp(-tau);
-}
-
-// Entry and exit t of the ray through [lo, hi] (t0 > t1 when it misses).
-fn slab(o: vec3<f32>, inv: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
-    let a = (lo - o) * inv;
-    let b = (hi - o) * inv;
-    let n = min(a, b);
-    let f = max(a, b);
-    return vec2<f32>(max(max(n.x, n.y), n.z), min(min(f.x, f.y), f.z));
 }
 
 @compute @workgroup_size(8, 8)

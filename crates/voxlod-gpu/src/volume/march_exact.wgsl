@@ -4,38 +4,11 @@
 // colour += T · (1 − e^(−σℓ)) · radiance, T *= e^(−σℓ). The next cell is looked up a nudge
 // (10⁻⁴ voxel) past the current one's exit, as on the CPU. Neighbouring rays cross the same
 // cells: coherent reads; the walk's length varies per ray (divergence at silhouettes).
+// Appended to march_common.wgsl (the parameters, the voxel, depth and image bindings, the slab
+// test).
 
-struct Params {
-    eye: vec4<f32>,
-    forward: vec4<f32>,
-    right: vec4<f32>,
-    up: vec4<f32>,
-    origin: vec4<f32>,
-    u: vec4<f32>,
-    v: vec4<f32>,
-    w: vec4<f32>,
-    // The eye in voxel coordinates (xyz), w: the nudge in world units.
-    eye_voxel: vec4<f32>,
-    // x: width, y: height, z: K, w: M.
-    dims: vec4<u32>,
-    // x: unused, y: 1 if `depth` is a depth buffer.
-    mode: vec4<u32>,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
 // K³ entries (key order (i·K + j)·K + k): the slot of a kept metavoxel, or 0xffffffff.
 @group(0) @binding(1) var<storage, read> index: array<u32>;
-@group(0) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> depth: array<f32>;
-@group(0) @binding(4) var<storage, read_write> image: array<vec4<f32>>;
-
-fn slab(o: vec3<f32>, inv: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
-    let a = (lo - o) * inv;
-    let b = (hi - o) * inv;
-    let n = min(a, b);
-    let f = max(a, b);
-    return vec2<f32>(max(max(n.x, n.y), n.z), min(min(f.x, f.y), f.z));
-}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {

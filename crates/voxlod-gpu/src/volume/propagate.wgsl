@@ -1,4 +1,4 @@
-// Light propagation (seed 001 Listing 5.2): one invocation per voxel column, M² per column of
+// Light propagation (McNabb 2015, Listing 5.2): one invocation per voxel column, M² per column of
 // metavoxels, 64 per workgroup (consecutive invocations are consecutive columns `a` of a row:
 // at every step of the walk down they read and write neighbouring voxels, coalesced). An
 // invocation walks its column's kept metavoxels top to bottom (consecutive slots, as the keys

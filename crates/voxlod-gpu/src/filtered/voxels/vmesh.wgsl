@@ -260,25 +260,6 @@ fn entry_point(d: vec3<f32>, k: u32, s: f32, t: f32) -> vec3<f32> {
     return e;
 }
 
-// sampler/lines.rs chord: an axis with d = 0 never ends the chord.
-fn chord_of(e: vec3<f32>, d: vec3<f32>) -> f32 {
-    var t = F32_MAX;
-    var ends = false;
-    for (var j = 0u; j < 3u; j++) {
-        if d[j] == 0.0 {
-            continue;
-        }
-        let inv = 1.0 / d[j];
-        t = min(t, max(-e[j] * inv, (1.0 - e[j]) * inv));
-        ends = true;
-    }
-    if !ends || !(abs(t) <= F32_MAX) {
-        return 0.0;
-    }
-    return max(t, 0.0);
-}
-
-
 // DirectionalRule::Lines for a unit d.
 fn lines_opacity(d: vec3<f32>) -> f32 {
     let k_inv = 1.0 / f32(LINES);
