@@ -304,5 +304,4 @@ impl<P: Payload> Payload for Directional<P> {
 }
 
 #[cfg(test)]
-#[path = "payload/tests.rs"]
 mod tests;

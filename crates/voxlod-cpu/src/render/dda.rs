@@ -507,5 +507,4 @@ impl Iterator for Dda {
 }
 
 #[cfg(test)]
-#[path = "dda_tests.rs"]
 mod tests;

@@ -294,5 +294,4 @@ fn centre_texel(
 }
 
 #[cfg(test)]
-#[path = "ground_truth_tests.rs"]
 mod tests;

@@ -162,5 +162,4 @@ fn keys(seed: u32) -> (u32, u32) {
 }
 
 #[cfg(test)]
-#[path = "indirect_tests.rs"]
 mod tests;
