@@ -5,7 +5,7 @@
 //!
 //! Each GPU kernel of voxlod-gpu is checked against the function here that it mirrors.
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 pub mod appearance;
 mod error;

@@ -46,7 +46,7 @@
 //! assert_eq!(compare(&reference, &reference).unwrap().psnr, f64::INFINITY);
 //! ```
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 mod error;
 pub mod heatmap;

@@ -5,7 +5,7 @@
 //! This crate is the bottom of the voxlod stack: it depends on no other voxlod crate and never on
 //! a GPU API. Every type the GPU reads is `#[repr(C)]` and [`bytemuck::Pod`].
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 pub mod binvox;
 pub mod brickmap;

@@ -7,7 +7,7 @@
 //! says sRGB; texture coordinates have their origin at the image's top-left corner, v pointing
 //! down (glTF's convention — the OBJ loader flips v).
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 pub mod animation;
 pub mod camera;
