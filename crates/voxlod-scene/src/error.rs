@@ -127,6 +127,20 @@ pub enum Error {
         /// The valid range.
         reason: &'static str,
     },
+    /// An animation cannot be evaluated: a morph-weights channel, a channel on a node that does
+    /// not exist or is given by a matrix, keys that do not match their values, a non-finite
+    /// time, a rotation that interpolates to zero.
+    #[error("animation '{animation}', channel {channel} (node {node}): {reason}")]
+    Animation {
+        /// The animation's name.
+        animation: String,
+        /// The channel's index in the animation.
+        channel: usize,
+        /// The node it targets.
+        node: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// A file type this crate does not load.
     #[error("{path}: unsupported scene file (expected .obj, .gltf or .glb)")]
     UnsupportedFormat {

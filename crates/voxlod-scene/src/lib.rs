@@ -23,7 +23,7 @@ pub mod procedural;
 pub mod scene;
 pub mod texture;
 
-pub use animation::{Animation, Node, Skin};
+pub use animation::{Animation, Node, Pose, Skin, Transform};
 pub use camera::Camera;
 pub use error::{Error, Result};
 pub use image::{Image, Srgb8Image};

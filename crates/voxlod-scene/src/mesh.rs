@@ -11,8 +11,14 @@ pub struct SkinBinding {
     pub skin: usize,
     /// Up to four joint indices per vertex (indices into the skin's joint list).
     pub joints: Vec<[u16; 4]>,
-    /// The matching weights.
+    /// The matching weights (non-negative, summing to 1).
     pub weights: Vec<[f32; 4]>,
+    /// Vertex positions in the skin's bind space, before skinning (morph targets at their
+    /// default weights applied): the joint matrices ([`crate::Skin::joint_matrices`]) blended
+    /// by the weights map them to world space. Empty when unknown.
+    pub bind_positions: Vec<Vec3>,
+    /// Unit vertex normals in bind space, one per bind position (empty when unknown).
+    pub bind_normals: Vec<Vec3>,
 }
 
 /// An indexed triangle mesh, already transformed to world space.
@@ -33,6 +39,10 @@ pub struct Mesh {
     pub material: usize,
     /// Skinning data, if the mesh is skinned.
     pub skin: Option<SkinBinding>,
+    /// The scene node ([`crate::Scene::nodes`]) whose transform placed this mesh, if it came
+    /// from a node hierarchy: an animation of that node moves the mesh rigidly (a skinned mesh
+    /// moves with its skin's joints instead).
+    pub node: Option<usize>,
 }
 
 impl Mesh {
@@ -78,10 +88,16 @@ impl Mesh {
         if !self.uvs.is_empty() && self.uvs.len() != n {
             return Err(length("uvs", self.uvs.len()));
         }
-        if let Some(skin) = &self.skin
-            && (skin.joints.len() != n || skin.weights.len() != n)
-        {
-            return Err(length("joints/weights", skin.joints.len().min(skin.weights.len())));
+        if let Some(skin) = &self.skin {
+            if skin.joints.len() != n || skin.weights.len() != n {
+                return Err(length("joints/weights", skin.joints.len().min(skin.weights.len())));
+            }
+            if !skin.bind_positions.is_empty() && skin.bind_positions.len() != n {
+                return Err(length("bind positions", skin.bind_positions.len()));
+            }
+            if skin.bind_normals.len() != skin.bind_positions.len() {
+                return Err(length("bind normals", skin.bind_normals.len()));
+            }
         }
         let non_finite = |attribute, vertex, value| Error::NonFinite {
             mesh: self.name.clone(),
@@ -97,6 +113,23 @@ impl Mesh {
         for (i, v) in self.normals.iter().enumerate() {
             if !v.is_finite() {
                 return Err(non_finite("normal", i, v.to_array()));
+            }
+        }
+        if let Some(skin) = &self.skin {
+            for (i, p) in skin.bind_positions.iter().enumerate() {
+                if !p.is_finite() {
+                    return Err(non_finite("bind position", i, p.to_array()));
+                }
+            }
+            for (i, w) in skin.weights.iter().enumerate() {
+                let sum: f32 = w.iter().sum();
+                if !(sum > 0.0 && sum.is_finite()) || w.iter().any(|x| *x < 0.0) {
+                    return Err(Error::InvalidParameter {
+                        name: format!("mesh '{}': skin weights of vertex {i}", self.name),
+                        value: format!("{w:?}"),
+                        reason: "weights must be finite, non-negative, with a positive sum".into(),
+                    });
+                }
             }
         }
         for (i, uv) in self.uvs.iter().enumerate() {

@@ -29,6 +29,7 @@ pub(crate) fn quad(name: &str, corner: Vec3, a: Vec3, b: Vec3, material: usize) 
         indices: vec![[0, 1, 2], [0, 2, 3]],
         material,
         skin: None,
+        node: None,
     }
 }
 

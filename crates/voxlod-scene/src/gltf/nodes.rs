@@ -10,15 +10,15 @@ use json::validation::Checked;
 
 use super::accessor::Data;
 use super::parse::err;
-use crate::animation::{AnimatedProperty, Channel, Interpolation};
+use crate::animation::{AnimatedProperty, Channel, Interpolation, Transform};
 use crate::{Animation, Camera, Node, Result, Skin};
 
-/// A node's local transform, checked finite.
-fn local(path: &Path, i: usize, node: &json::Node) -> Result<Mat4> {
+/// A node's local transform, checked finite, and its TRS form unless given by a matrix.
+fn local(path: &Path, i: usize, node: &json::Node) -> Result<(Mat4, Option<Transform>)> {
     let bad = |what: &str| err(path, format!("nodes[{i}]"), format!("{what} is not finite"));
     if let Some(m) = node.matrix {
         let m = Mat4::from_cols_array(&m);
-        return if m.is_finite() { Ok(m) } else { Err(bad("matrix")) };
+        return if m.is_finite() { Ok((m, None)) } else { Err(bad("matrix")) };
     }
     let t = Vec3::from_array(node.translation.unwrap_or([0.0; 3]));
     let s = Vec3::from_array(node.scale.unwrap_or([1.0; 3]));
@@ -32,7 +32,8 @@ fn local(path: &Path, i: usize, node: &json::Node) -> Result<Mat4> {
     if !r.is_finite() || r.length_squared() == 0.0 {
         return Err(err(path, format!("nodes[{i}]"), format!("rotation {r} is not a rotation")));
     }
-    Ok(Mat4::from_scale_rotation_translation(s, r.normalize(), t))
+    let trs = Transform { translation: t, rotation: r.normalize(), scale: s };
+    Ok((trs.matrix(), Some(trs)))
 }
 
 /// Every node with its local and world (rest pose) transforms. `parents` comes from
@@ -44,11 +45,13 @@ pub(super) fn nodes(
 ) -> Result<Vec<Node>> {
     let mut out: Vec<Node> = Vec::with_capacity(root.nodes.len());
     for (i, node) in root.nodes.iter().enumerate() {
+        let (local, trs) = local(path, i, node)?;
         out.push(Node {
             name: node.name.clone().unwrap_or_else(|| format!("nodes[{i}]")),
             parent: parents[i],
-            local: local(path, i, node)?,
+            local,
             world: Mat4::IDENTITY,
+            trs,
         });
     }
     let mut done = vec![false; out.len()];

@@ -59,6 +59,22 @@ fn normal_matrix(m: &Mat4) -> Option<Mat3> {
     (m3.determinant() != 0.0 && inv.is_finite()).then(|| inv.transpose())
 }
 
+/// Unit bind-space normals: the file's where they have a length, else area-weighted ones of the
+/// bind-space triangles (wound as the world ones).
+fn bind_normals(positions: &[Vec3], triangles: &[[u32; 3]], file: Option<&[Vec3]>) -> Vec<Vec3> {
+    let mut m =
+        Mesh { positions: positions.to_vec(), indices: triangles.to_vec(), ..Default::default() };
+    m.compute_normals();
+    if let Some(file) = file {
+        for (out, n) in m.normals.iter_mut().zip(file) {
+            if let Some(unit) = n.try_normalize() {
+                *out = unit;
+            }
+        }
+    }
+    m.normals
+}
+
 /// Builds primitive `p` of mesh `m` as instanced by `inst`; `None` for points, lines and
 /// primitives without triangles (counted in `report`).
 pub(super) fn mesh(
@@ -210,6 +226,8 @@ pub(super) fn mesh(
                 skin: s,
                 joints: Vec::with_capacity(n),
                 weights: Vec::with_capacity(n),
+                bind_positions: positions.clone(),
+                bind_normals: Vec::new(),
             };
             for (v, (j, w)) in joints.chunks_exact(4).zip(w.chunks_exact(4)).enumerate() {
                 let sum: f32 = w.iter().sum();
@@ -246,6 +264,8 @@ pub(super) fn mesh(
                 binding.joints.push([j[0], j[1], j[2], j[3]].map(|x| x as u16));
                 binding.weights.push(wn);
             }
+            // Before the winding is flipped for mirroring transforms: bind-space winding.
+            binding.bind_normals = bind_normals(&positions, &triangles, normals.as_deref());
             skin = Some(binding);
             Some(mats)
         }
@@ -274,6 +294,7 @@ pub(super) fn mesh(
         indices: triangles,
         material,
         skin,
+        node: Some(inst.node),
         ..Default::default()
     };
     mesh.compute_normals();

@@ -222,6 +222,7 @@ impl MeshBuilder {
             indices: self.indices,
             material,
             skin: None,
+            node: None,
         }
     }
 }

@@ -141,6 +141,7 @@ pub fn icosphere(center: Vec3, radius: f32, subdiv: u32) -> Mesh {
         indices: faces,
         material: 0,
         skin: None,
+        node: None,
     }
 }
 
