@@ -88,9 +88,90 @@ pub enum Error {
         /// Nodes it would hold.
         nodes: u64,
     },
-    /// The grid specification is invalid.
+    /// The grid specification is invalid, or a voxel cache file could not be read or written.
     #[error(transparent)]
     Grid(#[from] voxlod_format::Error),
+    /// An object's voxel cache would need more voxels along an axis than its packed positions
+    /// hold ([`crate::dynamic::MAX_CACHE_DIM`], 10 bits per axis).
+    #[error(
+        "object '{object}': its voxel cache needs {dims:?} voxels, more than {max} along an axis (positions pack 10 bits per axis): use a coarser world grid or split the object"
+    )]
+    CacheTooLarge {
+        /// The object.
+        object: String,
+        /// Voxels the cache would need per axis.
+        dims: [u64; 3],
+        /// The most per axis.
+        max: u32,
+    },
+    /// A voxel cache is inconsistent (a loaded file, or arrays of different lengths).
+    #[error("voxel cache '{object}': {reason}")]
+    InvalidCache {
+        /// The object.
+        object: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A frame's object-to-world matrix is not a rotation and translation at the cache's scale:
+    /// voxel transformation cannot scale or shear voxels (Yalçıner and Sahillioğlu 2020, §6).
+    #[error(
+        "object '{object}', matrix {matrix}: not rigid at the cache's scale {expected_scale}: column scales {scales:?}, largest column cosine {shear:.2e} (tolerance {tolerance:e}); scaling and shearing cached voxels is not supported"
+    )]
+    NotRigid {
+        /// The object.
+        object: String,
+        /// Which matrix (0 for a rigid object, the joint for a skinned one).
+        matrix: usize,
+        /// Lengths of the matrix's three linear columns.
+        scales: [f64; 3],
+        /// Largest |cosine| between two columns (0 without shear).
+        shear: f64,
+        /// The scale the cache was built for.
+        expected_scale: f64,
+        /// Relative tolerance.
+        tolerance: f64,
+    },
+    /// An object's cache was built for another world voxel size.
+    #[error(
+        "object '{object}': its cached voxels are {cache_voxel} world units, the world grid's are {world_voxel}: build the cache for this grid"
+    )]
+    CacheResolution {
+        /// The object.
+        object: String,
+        /// A cached voxel's edge in world units.
+        cache_voxel: f64,
+        /// The world grid's voxel edge.
+        world_voxel: f64,
+    },
+    /// A frame's matrix has a NaN or infinite entry, or a skinned object got the wrong number
+    /// of joint matrices.
+    #[error("object '{object}': {reason}")]
+    InvalidPlacement {
+        /// The object.
+        object: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A frame would sum more contributions than the fixed-point blend keeps exact.
+    #[error(
+        "a frame of {contributions} contributions exceeds the {max} the fixed-point blend sums exactly"
+    )]
+    FrameTooLarge {
+        /// Contributions of the frame (voxels × 8 for the 8-neighbour filter).
+        contributions: u64,
+        /// The most.
+        max: u64,
+    },
+    /// An option is out of its range.
+    #[error("invalid {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// The option.
+        name: &'static str,
+        /// Its value.
+        value: String,
+        /// The valid range.
+        reason: &'static str,
+    },
     /// A structural invariant does not hold (found by [`crate::Octree::validate`]).
     #[error("octree invariant broken at level {level}, node {node}: {reason}")]
     Invalid {

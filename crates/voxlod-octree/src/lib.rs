@@ -14,6 +14,7 @@
 //! | `validate` | [`Octree::validate`]: every structural invariant |
 //! | [`stats`] | [`MemoryStats`]: nodes per level, bytes by role, bytes per voxel |
 //! | [`gpu_layout`] | [`FlatOctree`]: the `#[repr(C)]` GPU layout, and a CPU emulation of the lock-free level-by-level GPU build |
+//! | [`dynamic`] | moving objects by voxel transformation: object-space voxel caches, per-frame rigid and skinned transforms, nearest and 8-neighbour filters, the fixed-point blend into the world voxels the octree is rebuilt from |
 //!
 //! This crate depends on `voxlod-format` only (no GPU API, no scene crate), so another project
 //! can use it alone. Out of scope: merging virtual-mesh records across levels (open research,
@@ -48,6 +49,7 @@
 #![deny(missing_docs)]
 
 mod build;
+pub mod dynamic;
 mod error;
 pub mod gpu_layout;
 mod input;

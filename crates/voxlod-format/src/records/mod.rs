@@ -9,10 +9,15 @@
 //! | [`VirtualMeshRecord`] | 136 | eigenframe (snorm8×3×3), semi-axes (log byte×3), 8 face colours (sRGB8), 24 extremal normals (snorm8×3), distribution mask, 27 sub-cell opacities (unorm8) |
 //! | [`SpecularRecord`] | 2 | mean specular level (unorm8) and exponent (log byte); stored beside any of the above only for scenes with specular materials |
 //! | [`AdaptiveRef`] | 4 | which representation a voxel uses (2 bits) and its index in that representation's array (30 bits) |
+//! | [`VoxelSkin`] | 8 | linear-blend-skinning influences of a voxel of an object-space cache: 4 joint indices (u8), 4 weights (unorm8 summing to 255) |
+//! | [`SkinnedRecord`] | 16 | a skinned object's cached voxel: [`AverageRecord`] + [`VoxelSkin`] |
 //!
 //! Decoders return linear floats; quantizers are in [`quant`].
 
 pub mod quant;
+mod skin;
+
+pub use skin::{SkinnedRecord, VoxelSkin};
 
 use glam::{Mat3, Vec3};
 

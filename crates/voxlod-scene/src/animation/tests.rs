@@ -86,8 +86,7 @@ fn cubic_spline_is_the_hermite_spline_with_scaled_tangents() {
     )]);
     for s in [0.0f32, 0.25, 0.5, 0.9] {
         let (s2, s3) = (s * s, s * s * s);
-        let expected =
-            (s3 - 2.0 * s2 + s) * 2.0 * 2.0 + (-2.0 * s3 + 3.0 * s2) - (s3 - s2) * 2.0;
+        let expected = (s3 - 2.0 * s2 + s) * 2.0 * 2.0 + (-2.0 * s3 + 3.0 * s2) - (s3 - s2) * 2.0;
         let got = translation_at(&a, &nodes, 1.0 + 2.0 * s).x;
         assert!((got - expected).abs() < 1e-6, "s = {s}: {got} vs {expected}");
     }
