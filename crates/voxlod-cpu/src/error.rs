@@ -13,6 +13,17 @@ pub enum Error {
     /// A grid or format problem.
     #[error(transparent)]
     Format(#[from] voxlod_format::Error),
+    /// An octree or voxel-cache problem (voxlod-octree).
+    #[error(transparent)]
+    Octree(#[from] voxlod_octree::Error),
+    /// A scene's moving object cannot be cached or posed.
+    #[error("dynamic object '{object}': {reason}")]
+    Dynamic {
+        /// The object.
+        object: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A grid whose voxelization would not fit in memory, with the estimate.
     #[error(
         "a {dims:?} grid needs about {estimated_bytes} bytes for this voxelization, over the limit of {limit_bytes} bytes"

@@ -8,6 +8,7 @@
 #![deny(missing_docs)]
 
 pub mod appearance;
+pub mod dynamic;
 mod error;
 pub mod random;
 pub mod raycast;
