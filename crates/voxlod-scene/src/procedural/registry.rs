@@ -13,7 +13,7 @@ use glam::Vec3;
 
 use super::param::{parse, parse_bool, unknown};
 use super::primitives::{cornell_box, cube, icosphere, scene_with};
-use super::{BlindsParams, ForestParams, IslandParams, blinds, forest, island};
+use super::{BlindsParams, CrowdParams, ForestParams, IslandParams, blinds, crowd, forest, island};
 use crate::{Error, Material, Result, Scene};
 
 /// One parameter of a builtin scene.
@@ -75,6 +75,15 @@ const BLINDS_PARAMS: &[ParamInfo] = &[
     param("extent", "2", "scene width, 0.001..=1e6"),
 ];
 
+const CROWD_PARAMS: &[ParamInfo] = &[
+    param("walkers", "16", "walking skinned characters (17 joints each), 1..=256"),
+    param("rigid", "16", "rotating tori and cubes, 0..=1024"),
+    param("sides", "12", "sides of every body tube (3 512 triangles per walker at 12), 8..=64"),
+    param("spacing", "2.5", "distance between walker slots, 1.5..=100"),
+    param("duration", "4", "length of the looping animation in seconds, 1..=60"),
+    param("seed", "1", "random seed, any u64"),
+];
+
 const SPHERE_PARAMS: &[ParamInfo] =
     &[param("subdiv", "3", "icosphere subdivisions (20·4^subdiv triangles), 0..=7")];
 
@@ -96,6 +105,12 @@ const BUILTINS: &[Builtin] = &[
         description: "tilted two-coloured slats below voxel spacing: directional opacity",
         params: BLINDS_PARAMS,
         build: |kv| blinds(&blinds_params(kv)?),
+    },
+    Builtin {
+        name: "crowd",
+        description: "animated: skinned walkers among rotating rigid objects on a static floor",
+        params: CROWD_PARAMS,
+        build: |kv| crowd(&crowd_params(kv)?),
     },
     Builtin {
         name: "cornell",
@@ -252,6 +267,25 @@ pub(super) fn island_params(kv: &[(&str, &str)]) -> Result<IslandParams> {
             "blade_height" => p.blade_height = parse(s, k, v)?,
             "blade_width" => p.blade_width = parse(s, k, v)?,
             _ => return Err(unknown(s, k, v, &[])),
+        }
+    }
+    p.validate()?;
+    Ok(p)
+}
+
+/// [`CrowdParams`] from spec pairs.
+pub(super) fn crowd_params(kv: &[(&str, &str)]) -> Result<CrowdParams> {
+    let mut p = CrowdParams::default();
+    for &(k, v) in kv {
+        let c = "crowd";
+        match k {
+            "walkers" => p.walkers = parse(c, k, v)?,
+            "rigid" => p.rigid = parse(c, k, v)?,
+            "sides" => p.sides = parse(c, k, v)?,
+            "spacing" => p.spacing = parse(c, k, v)?,
+            "duration" => p.duration = parse(c, k, v)?,
+            "seed" => p.seed = parse(c, k, v)?,
+            _ => return Err(unknown(c, k, v, &[])),
         }
     }
     p.validate()?;
