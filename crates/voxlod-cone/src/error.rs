@@ -36,6 +36,9 @@ pub enum Error {
         /// The offending value.
         value: f32,
     },
+    /// A dynamic frame's transform, blend or octree build failed.
+    #[error("dynamic frame: {0}")]
+    Frame(voxlod_octree::Error),
     /// Building the radiance octree failed.
     #[error("building the radiance octree: {0}")]
     Octree(#[from] voxlod_octree::Error),

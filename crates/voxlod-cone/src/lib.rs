@@ -10,6 +10,7 @@
 //! | [`cone`] | one cone's march: **aperture (full angle)**, footprint level, step, opacity correction, AO falloff — defined there once |
 //! | [`tracer`] | [`ConeTracer`]: AO, diffuse and specular cones from a shading point; self-occlusion offsets |
 //! | [`primary`] | [`PrimaryRenderer`]: primary visibility, one pixel-wide cone per pixel, level of detail by distance, shaded samples |
+//! | [`dynamic`] | [`FramePipeline`]: a dynamic scene's frame — transform the cached voxels, rebuild the octree, re-inject the light (skipped when nothing moved) |
 //!
 //! Layering: depends on `voxlod-octree` and `voxlod-format` only (no BVH, no GPU API). Shadows
 //! at injection are either marched through the geometry octree itself or given per leaf by the
@@ -53,6 +54,7 @@
 #![deny(missing_docs)]
 
 pub mod cone;
+pub mod dynamic;
 mod error;
 pub mod inject;
 pub mod medium;
@@ -60,6 +62,7 @@ pub mod primary;
 pub mod tracer;
 
 pub use cone::{Cone, ConeResult, March, SampleInfo, falloff, trace, trace_shaded};
+pub use dynamic::{FramePipeline, FrameReport};
 pub use error::{Error, Result};
 pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};
 pub use medium::{ConeMedium, RadianceLeaf, RadiancePayload};
