@@ -57,6 +57,7 @@
 //! | [`precompute`] | per-voxel ray sampling, Averages sums, opacity subgrid | [`voxlod_cpu::appearance::precompute`] | ≤ 10⁻³ of lines change case; ±1 per record byte |
 //! | [`octree`] | sparse voxel octree build, Averages pre-filter | [`voxlod_octree`] | exact topology; payloads within `8·depth·2⁻²⁴` |
 //! | [`cone`] | cone tracing (AO, diffuse, specular) | [`voxlod_cone::ConeTracer`] | within 1e-3 for 99 % of points |
+//! | [`dynamic`] | a dynamic scene's frame: voxel transformation, fixed-point blend, octree rebuild, light injection | [`voxlod_octree::dynamic`], [`voxlod_cone::inject()`] | cells exact but within 10⁻⁴ voxel of a boundary (≤ 0.1 %); sums and topology exact; radiance within 1e-3 for 99 % |
 //! | [`volume`] | metavoxel binning, fill, propagation, march | [`voxlod_cpu::volume`] | binning exact; values 1e-5 / 1e-4 relative; image 1 sRGB step |
 //!
 //! Each module's documentation states why its bound is what it is (which WGSL operations are
@@ -122,6 +123,7 @@
 
 pub mod cone;
 pub mod context;
+pub mod dynamic;
 mod error;
 pub mod filtered;
 pub mod ground_truth;

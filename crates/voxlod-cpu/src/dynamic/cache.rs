@@ -13,7 +13,7 @@ use super::pieces::{barycentric, clip};
 use super::scene::{DynamicScene, ObjectKind, bounds};
 use crate::appearance::averages;
 use crate::appearance::precompute::{PrecomputeOptions, precompute};
-use crate::appearance::sampler::SamplingContext;
+use crate::appearance::line_sampler::SamplingContext;
 use crate::voxelize::{self, Mode, Voxelization};
 use crate::{Error, Result};
 
@@ -51,19 +51,40 @@ pub struct CacheOptions {
 }
 
 /// The area-weighted pieces of voxel `index`'s triangles: `(triangle, area, centroid)`; when all
-/// pieces have zero area (degenerate triangles), each gets area 1.
+/// pieces have zero area (degenerate triangles), each gets area 1. The voxelizer decides
+/// overlap on vertices snapped to its lattice, so a triangle it lists may miss the exact box by
+/// a hair: then the box grown by a thousandth of a voxel is tried, and failing that each listed
+/// triangle counts once at its point nearest the voxel's centre (its clamped barycentric
+/// projection).
 fn voxel_pieces(geometry: &Geometry, vox: &Voxelization, index: usize) -> Vec<(u32, f64, DVec3)> {
     let c = vox.voxels.coord_of(index);
+    let size = vox.grid.voxel_size;
     let lo = vox.grid.voxel_min(c);
-    let hi = lo + DVec3::splat(vox.grid.voxel_size);
-    let mut out: Vec<(u32, f64, DVec3)> = vox
-        .triangles_of(index)
-        .iter()
-        .filter_map(|&t| {
-            let tri = geometry.triangle(t as usize).map(|p| p.as_dvec3());
-            clip(tri, lo, hi).map(|p| (t, p.area, p.centroid))
-        })
-        .collect();
+    let hi = lo + DVec3::splat(size);
+    let tris = vox.triangles_of(index);
+    let clip_all = |grow: f64| -> Vec<(u32, f64, DVec3)> {
+        tris.iter()
+            .filter_map(|&t| {
+                let tri = geometry.triangle(t as usize).map(|p| p.as_dvec3());
+                clip(tri, lo - grow, hi + grow).map(|p| (t, p.area, p.centroid))
+            })
+            .collect()
+    };
+    let mut out = clip_all(0.0);
+    if out.is_empty() {
+        out = clip_all(1e-3 * size);
+    }
+    if out.is_empty() {
+        let centre = lo + DVec3::splat(0.5 * size);
+        out = tris
+            .iter()
+            .map(|&t| {
+                let tri = geometry.triangle(t as usize).map(|p| p.as_dvec3());
+                let b = barycentric(tri, centre);
+                (t, 1.0, tri[0] * b[0] + tri[1] * b[1] + tri[2] * b[2])
+            })
+            .collect();
+    }
     if out.iter().all(|p| p.1 <= 0.0) {
         out.iter_mut().for_each(|p| p.1 = 1.0);
     }

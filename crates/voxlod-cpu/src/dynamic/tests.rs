@@ -256,3 +256,20 @@ fn simple_skin_caches_and_moves_with_its_joints() {
     let (inter, union, _, _) = compare(&ours, &reference);
     assert!(inter as f64 / union as f64 > 0.4, "IoU {}", inter as f64 / union as f64);
 }
+
+/// The crowd's caches at a coarse voxel (0.08): every walker voxel gets a normalized skin —
+/// including voxels whose listed triangles miss the exact voxel box by the voxelizer's snapping
+/// (they once had no pieces, hence no weights).
+#[test]
+fn the_crowds_caches_build_at_a_coarse_voxel() {
+    let scene = voxlod_scene::procedural::from_spec("crowd?walkers=2&rigid=2&sides=8").unwrap();
+    let ds = DynamicScene::new(scene, 0).unwrap();
+    assert_eq!((ds.objects.len(), ds.statics.len()), (4, 1));
+    let options = CacheOptions { records: RecordSource::Pieces, ..Default::default() };
+    for o in 0..ds.objects.len() {
+        let cache = build_cache(&ds, o, 0.08, &options).unwrap();
+        cache.validate().unwrap();
+        assert!(cache.len() > 100, "{}", cache.len());
+        assert!(cache.records.iter().all(|r| r.color != [0; 3]), "no black fragment records");
+    }
+}

@@ -112,9 +112,50 @@ pub struct GpuConeOctree {
 }
 
 impl GpuConeOctree {
+    /// An isotropic octree already on the device in the flat layout — built by voxlod-gpu's
+    /// octree kernels, its payloads in the kernel's isotropic layout ([`GpuRadiance`], one per
+    /// node): the host's level table, the node and tile buffers (`tile_count` tiles; none is
+    /// fine) and the payloads.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_device(
+        ctx: &Context,
+        levels: &[GpuLevel],
+        nodes: wgpu::Buffer,
+        tiles: wgpu::Buffer,
+        tile_count: u64,
+        payload: wgpu::Buffer,
+        grid: voxlod_format::GridSpec,
+        depth: u32,
+        first_dense: u32,
+    ) -> Result<Self> {
+        let tiles = if tile_count == 0 {
+            let none = [GpuTile { links: [voxlod_octree::NONE; 3] }];
+            ctx.storage_init("octree tiles", bytemuck::cast_slice(&none))?
+        } else {
+            tiles
+        };
+        let node_count = levels.iter().map(|l| l.count as usize).sum();
+        Ok(Self {
+            levels: ctx.storage_init("octree levels", bytemuck::cast_slice(levels))?,
+            nodes,
+            tiles,
+            payload,
+            grid,
+            depth,
+            first_dense,
+            directional: false,
+            node_count,
+        })
+    }
+
     /// Nodes uploaded (all levels).
     pub fn node_count(&self) -> usize {
         self.node_count
+    }
+
+    /// The level table, node, tile and payload buffers (bindings 1–4 of the kernel).
+    pub(crate) fn buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer) {
+        (&self.levels, &self.nodes, &self.tiles, &self.payload)
     }
     /// Whether the payload carries directional opacities.
     pub fn is_directional(&self) -> bool {

@@ -11,7 +11,7 @@ use super::*;
 impl<'a> OctreeBuilder<'a> {
     /// Records the in-place exclusive prefix sum of the `n` values of `data`; returns the
     /// buffer whose first word will be their total.
-    pub(super) fn scan(
+    pub(crate) fn scan(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         data: &wgpu::Buffer,
@@ -41,7 +41,7 @@ impl<'a> OctreeBuilder<'a> {
     /// The build (module docs: kernels).
     pub(super) fn run(&self, input: Input<'_>) -> Result<GpuOctree<'a>> {
         let ctx = self.ctx;
-        let Input { depth, first_dense: fd, coords, voxels, payload } = input;
+        let Input { depth, first_dense: fd, coords, voxels, payload, device } = input;
         let n = voxels as u64;
         let mark_threads = 8 * n;
         if mark_threads > MAX_INVOCATIONS {
@@ -75,8 +75,15 @@ impl<'a> OctreeBuilder<'a> {
         let dense_nodes = next;
         let mut tile_total = 0u64;
         let mut keep = Vec::new();
-        let coords_buf =
-            ctx.storage_init("octree voxel coordinates", bytemuck::cast_slice(&coords))?;
+        let host_coords;
+        let coords_buf = match device {
+            Some((c, _)) => c,
+            None => {
+                host_coords =
+                    ctx.storage_init("octree voxel coordinates", bytemuck::cast_slice(&coords))?;
+                &host_coords
+            }
+        };
         let mut nodes = Growing::new(ctx, "octree nodes", 8, dense_nodes, dense_nodes + 16 * n)?;
         let mut tiles = Growing::new(ctx, "octree tiles", 12, 0, 2 * n)?;
         let table =
@@ -104,7 +111,7 @@ impl<'a> OctreeBuilder<'a> {
                 MARK,
                 mark_threads.div_ceil(WORKGROUP),
                 params,
-                &[(1, &level_buf), (2, &nodes.buffer), (3, &coords_buf), (4, &flags), (5, &masks)],
+                &[(1, &level_buf), (2, &nodes.buffer), (3, coords_buf), (4, &flags), (5, &masks)],
                 &mut keep,
             )?;
             let total = self.scan(&mut encoder, &flags, parents, &mut keep)?;
@@ -174,16 +181,24 @@ impl<'a> OctreeBuilder<'a> {
             LEAVES,
             n.div_ceil(WORKGROUP),
             params,
-            &[(1, &level_buf), (2, &nodes.buffer), (3, &coords_buf), (4, &hits), (5, &duplicate)],
+            &[(1, &level_buf), (2, &nodes.buffer), (3, coords_buf), (4, &hits), (5, &duplicate)],
             &mut keep,
         )?;
-        let payload_buf = match payload {
+        let host_payload;
+        let payload_in = match (device, payload) {
+            (Some((_, p)), _) => Some(p),
+            (None, Some(payload)) => {
+                host_payload =
+                    ctx.storage_init("octree voxel payloads", bytemuck::cast_slice(payload))?;
+                Some(&host_payload)
+            }
+            (None, None) => None,
+        };
+        let payload_buf = match payload_in {
             None => None,
-            Some(payload) => {
+            Some(input) => {
                 let stride = size_of::<AveragePayload>() as u64;
                 let out = ctx.storage_zeroed("octree payloads", next * stride)?;
-                let input =
-                    ctx.storage_init("octree voxel payloads", bytemuck::cast_slice(payload))?;
                 self.dispatch(
                     &mut encoder,
                     SCATTER,
@@ -192,8 +207,8 @@ impl<'a> OctreeBuilder<'a> {
                     &[
                         (1, &level_buf),
                         (2, &nodes.buffer),
-                        (3, &coords_buf),
-                        (4, &input),
+                        (3, coords_buf),
+                        (4, input),
                         (5, &out),
                     ],
                     &mut keep,
@@ -211,7 +226,6 @@ impl<'a> OctreeBuilder<'a> {
                         &mut keep,
                     )?;
                 }
-                keep.push(input);
                 Some(out)
             }
         };
@@ -225,6 +239,13 @@ impl<'a> OctreeBuilder<'a> {
             });
         }
         if flags[0] != 0 {
+            if device.is_some() {
+                return Err(Error::Device {
+                    adapter: ctx.info().name.clone(),
+                    during: "building an octree",
+                    message: "the device-resident input holds a voxel twice".into(),
+                });
+            }
             return Err(first_duplicate(&coords));
         }
         drop(keep);

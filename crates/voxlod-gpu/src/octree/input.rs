@@ -16,6 +16,8 @@ pub(super) struct Input<'v> {
     pub(super) coords: Vec<u32>,
     pub(super) voxels: usize,
     pub(super) payload: Option<&'v [AveragePayload]>,
+    /// Input already on the device (coordinates, payloads), instead of `coords` and `payload`.
+    pub(super) device: Option<(&'v wgpu::Buffer, &'v wgpu::Buffer)>,
 }
 
 /// The CPU builds' input checks, in their order (grid, plan, then per voxel: inside the grid,
@@ -39,7 +41,7 @@ pub(super) fn check_input<'v>(
         }
         flat.extend_from_slice(&c.to_array());
     }
-    Ok(Input { depth, first_dense, coords: flat, voxels, payload })
+    Ok(Input { depth, first_dense, coords: flat, voxels, payload, device: None })
 }
 
 /// The first duplicate in Morton order, as the CPU build names it (error path only).

@@ -85,7 +85,7 @@ mod params;
 pub use buffers::GpuOctree;
 pub use params::GpuOctreeParams;
 
-use input::check_input;
+use input::{Input, check_input};
 
 /// The WGSL shared by every kernel: the mirrors of [`GpuNode`](voxlod_octree::GpuNode),
 /// [`GpuTile`](voxlod_octree::GpuTile), [`GpuLevel`](voxlod_octree::GpuLevel),
@@ -174,6 +174,77 @@ impl<'a> OctreeBuilder<'a> {
     ) -> Result<GpuOctree<'a>> {
         let input = check_input(grid, coords.iter().copied(), None, options)?;
         self.run(input)
+    }
+
+    /// Builds the octree of `voxels` voxels whose coordinates (`u32` × 3 each) and Averages
+    /// payloads are already on the device — the output of another kernel (the
+    /// [`crate::dynamic`] blend) — left on the device. The input is trusted to be inside
+    /// `grid`, without duplicates and with valid payloads (the producing kernel guarantees it;
+    /// a duplicate is still detected and reported as a device error); the grid and `options`
+    /// are checked as [`OctreeBuilder::build`] checks them.
+    pub fn build_device(
+        &self,
+        grid: &GridSpec,
+        coords: &wgpu::Buffer,
+        payload: &wgpu::Buffer,
+        voxels: usize,
+        options: &BuildOptions,
+    ) -> Result<GpuOctree<'a>> {
+        grid.validate().map_err(voxlod_octree::Error::from)?;
+        let (depth, first_dense) = voxlod_octree::plan(grid.dims, options)?;
+        let input = Input {
+            depth,
+            first_dense,
+            coords: Vec::new(),
+            voxels,
+            payload: None,
+            device: Some((coords, payload)),
+        };
+        self.run(input)
+    }
+
+    /// Fills `tree` (built from the same voxels, in the same order as `coords`) with new leaf
+    /// payloads `payload` (Averages layout, one per voxel) pre-filtered up every level: the
+    /// octree of the same voxels with other payloads (for example injected radiance) without
+    /// building its topology again. Returns the new payload buffer (one per node).
+    pub fn refill(
+        &self,
+        tree: &GpuOctree<'a>,
+        coords: &wgpu::Buffer,
+        payload: &wgpu::Buffer,
+        voxels: usize,
+    ) -> Result<wgpu::Buffer> {
+        let ctx = self.ctx;
+        let mut keep = Vec::new();
+        let level_buf = ctx.storage_init("octree levels", bytemuck::cast_slice(&tree.levels))?;
+        let stride = size_of::<AveragePayload>() as u64;
+        let out = ctx.storage_zeroed("octree payloads", tree.node_count * stride)?;
+        let mut encoder = ctx.device().create_command_encoder(&Default::default());
+        let n = voxels as u64;
+        let fd = tree.first_dense;
+        let params = GpuOctreeParams { n: n as u32, level: 0, first_dense: fd, extra: 0 };
+        self.dispatch(
+            &mut encoder,
+            SCATTER,
+            n.div_ceil(WORKGROUP),
+            params,
+            &[(1, &level_buf), (2, &tree.nodes), (3, coords), (4, payload), (5, &out)],
+            &mut keep,
+        )?;
+        for l in 1..=tree.depth {
+            let count = tree.levels[l as usize].count as u64;
+            let p = GpuOctreeParams { n: count as u32, level: l, first_dense: fd, extra: 0 };
+            self.dispatch(
+                &mut encoder,
+                PREFILTER,
+                count.div_ceil(WORKGROUP),
+                p,
+                &[(1, &level_buf), (2, &tree.nodes), (3, &out)],
+                &mut keep,
+            )?;
+        }
+        ctx.submit("refilling an octree's payloads", encoder)?;
+        Ok(out)
     }
 
     /// Records one dispatch of `kernel` over `threads` invocations (`scan_block`: blocks) with

@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`materials`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`]),
+//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`dynamic`], [`volume`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -12,6 +12,7 @@
 //! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
 
 mod cone;
+mod dynamic;
 mod filtered;
 mod ground_truth;
 mod harness;
@@ -75,6 +76,11 @@ fn equivalence_suite() {
         suite.run("cone tracing (proptest)", backend, cone::property);
         suite.run("cone tracing (control)", backend, cone::control);
         suite.run("cone tracing (errors)", backend, cone::errors);
+        suite.run("dynamic transform (scenes)", backend, dynamic::transform_scenes);
+        suite.run("dynamic blend (exact)", backend, dynamic::blend_scenes);
+        suite.run("dynamic rebuild (exact)", backend, dynamic::rebuild_scenes);
+        suite.run("dynamic inject (scenes)", backend, dynamic::inject_scenes);
+        suite.run("dynamic frame (scenes)", backend, dynamic::frame_scenes);
         suite.run("volume binning (scenes)", backend, volume::binning_scenes);
         suite.run("volume fill (scenes)", backend, volume::fill_scenes);
         suite.run("volume propagation (scenes)", backend, volume::propagation_scenes);
