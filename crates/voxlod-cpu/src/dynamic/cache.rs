@@ -12,8 +12,8 @@ use voxlod_scene::{Geometry, Scene};
 use super::pieces::{barycentric, clip};
 use super::scene::{DynamicScene, ObjectKind, bounds};
 use crate::appearance::averages;
-use crate::appearance::precompute::{PrecomputeOptions, precompute};
 use crate::appearance::line_sampler::SamplingContext;
+use crate::appearance::precompute::{PrecomputeOptions, precompute};
 use crate::voxelize::{self, Mode, Voxelization};
 use crate::{Error, Result};
 

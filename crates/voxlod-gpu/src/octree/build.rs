@@ -204,13 +204,7 @@ impl<'a> OctreeBuilder<'a> {
                     SCATTER,
                     n.div_ceil(WORKGROUP),
                     params,
-                    &[
-                        (1, &level_buf),
-                        (2, &nodes.buffer),
-                        (3, coords_buf),
-                        (4, input),
-                        (5, &out),
-                    ],
+                    &[(1, &level_buf), (2, &nodes.buffer), (3, coords_buf), (4, input), (5, &out)],
                     &mut keep,
                 )?;
                 for l in 1..=depth {
