@@ -14,6 +14,7 @@
 //! | [`baseline`] | ground truth and its noise, voxelization, the voxel baseline (opaque cubes of average colour) per resolution |
 //! | [`filtered`] | the filtered-appearance representations of Brito, Poulin and Teichrieb (2023): Averages, \[VJK21\], virtual mesh + opacity subgrid, Adaptive |
 //! | [`volume`] | procedural participating media with metavoxels (McNabb, GPU Pro): attenuation models, metavoxel sizes, memory |
+//! | [`dynamic`] | dynamic scenes by voxel transformation (Yalçıner and Sahillioğlu 2020): transformed object-space caches against re-voxelization — agreement, exact rotations, temporal stability, time per frame against object count, a frame sequence on either backend |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
@@ -50,6 +51,7 @@ pub mod alloc;
 pub mod backend;
 pub mod baseline;
 pub mod cone;
+pub mod dynamic;
 mod error;
 pub mod filtered;
 mod ground_truths;
