@@ -39,6 +39,11 @@ pub enum Command {
     /// Voxel cone tracing on a sparse voxel octree: AO and one-bounce indirect light against
     /// ray-traced references, over cone count × aperture × octree depth × step, and light leaking.
     Cone(ConeArgs),
+    /// Dynamic scenes by voxel transformation: an animated scene's moving objects voxelized
+    /// once and moved every frame (nearest, 8-neighbour; rigid, skinned), against
+    /// re-voxelizing them — agreement, exact rotations, flicker, time per frame against object
+    /// count — and a frame sequence through the whole pipeline on either backend.
+    Dynamic(DynamicArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
     /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
@@ -252,6 +257,50 @@ pub struct ConeArgs {
     pub lod_spp: u32,
     /// Output directory.
     #[arg(short, long, default_value = "out/cone")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod dynamic`.
+#[derive(Debug, Args)]
+pub struct DynamicArgs {
+    /// An animated scene: a .gltf/.glb file with an animation, or `builtin:crowd[?...]`.
+    #[arg(default_value = "builtin:crowd?walkers=4&rigid=4")]
+    pub scene: String,
+    /// The study's larger settings: six times, thresholds ¼ and ½, 256-ray references,
+    /// scaling up to 256 walkers (takes much longer).
+    #[arg(long)]
+    pub full: bool,
+    /// World voxel edge in world units (> 0; the crowd's walkers are 1.85 tall).
+    #[arg(long, default_value_t = 0.05, value_parser = parse::positive_f32)]
+    pub voxel: f32,
+    /// Animation times to measure, seconds, comma-separated (default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = parse::non_negative_f32)]
+    pub times: Vec<f32>,
+    /// Walker counts of the scaling part (1..=256), comma-separated; "0" skips it.
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(0..=256))]
+    pub walkers: Vec<u32>,
+    /// Frames of the sequence rendered through the pipeline (0..=256).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=256))]
+    pub frames: Option<u32>,
+    /// Image width in pixels (8..=1024; height ¾ of it).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=1024))]
+    pub width: Option<u32>,
+    /// Rays per pixel of the ray-traced references.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Skip the rotations and the stability parts.
+    #[arg(long)]
+    pub no_extras: bool,
+    /// Where the frame sequence (and the scaling part's GPU column) runs: cpu (the reference)
+    /// or gpu (the whole frame on the device, on the adapter `VOXLOD_ADAPTER` selects; no
+    /// adapter is an error).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/dynamic")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]
