@@ -52,6 +52,7 @@ mod error;
 pub mod heatmap;
 pub mod json;
 pub mod metrics;
+pub mod npy;
 mod pair;
 pub mod patterns;
 pub mod report;
