@@ -1,5 +1,5 @@
 //! `voxlod cone` end to end on a tiny setting: the sweep's rows, the references'
-//! noise, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
+//! own error, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
 //! shared by the cone tracer and the ray-traced reference.
 
 use std::process::Command;
@@ -46,8 +46,11 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     assert!(rows.iter().all(|r| r["ao_ssim"].as_f64().unwrap() < 1.0), "{rows:?}");
     assert_eq!(rows[0]["depth"], 3);
     assert_eq!(rows[4]["depth"], 4);
-    let noise = &v["reference_noise_mse"];
-    assert!(["ao", "indirect"].iter().all(|k| noise[k].as_f64().unwrap() >= 0.0), "{noise}");
+    let (seeds, error) = (&v["reference_seed_mse"], &v["reference_error_mse"]);
+    for k in ["ao", "indirect"] {
+        let (s, e) = (seeds[k].as_f64().unwrap(), error[k].as_f64().unwrap());
+        assert!(s >= 0.0 && e == s / 2.0, "{seeds} {error}");
+    }
     let octrees = v["octrees"].as_array().unwrap();
     assert_eq!(octrees[0]["resolution"], 8);
     assert!(octrees.iter().all(|o| o["voxels"].as_u64().unwrap() > 0), "{octrees:?}");
