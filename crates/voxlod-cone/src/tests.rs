@@ -331,7 +331,7 @@ fn diffuse_cones_gather_a_lit_floor() {
     let e = tracer.diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!((e.x - 0.97).abs() < 0.05, "{e}");
     // 30° cones read the 1-voxel floor at coarse levels where its coverage is small and
-    // leak past it (0.45 when written); directional opacities keep the floor opaque along y.
+    // leak past it (to about 0.45); directional opacities keep the floor opaque along y.
     let tracer = ConeTracer::new(&radiance, TraceOptions::default()).unwrap();
     let e30 = tracer.diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!(e30.x < e.x - 0.1, "{e30} vs {e}");
@@ -342,7 +342,7 @@ fn diffuse_cones_gather_a_lit_floor() {
         .diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!(e_aniso.x > e30.x + 0.05 && e_aniso.x < 1.0, "{e_aniso} vs {e30}");
     // Facing up, nothing above: no indirect light for narrow cones; 30° cones reach levels
-    // whose nodes span the floor too and pick up a little (0.021 when written).
+    // whose nodes span the floor too and pick up a little (about 0.02).
     let e =
         ConeTracer::new(&radiance, narrow).unwrap().diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::Y);
     assert!(e.max_element() < 1e-4, "{e}");
