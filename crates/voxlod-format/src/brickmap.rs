@@ -285,6 +285,9 @@ impl<T> BrickMap<T> {
     }
 
     /// Coordinate of the voxel holding `values()[index]`.
+    ///
+    /// # Panics
+    /// If `index` is not below [`BrickMap::len`].
     pub fn coord_of(&self, index: usize) -> UVec3 {
         let b = self.bricks.partition_point(|h| h.first as usize <= index) - 1;
         let header = &self.bricks[b];

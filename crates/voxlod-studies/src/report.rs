@@ -93,7 +93,8 @@ impl Config {
         }
     }
 
-    /// Paper-scale settings: 128³ and 256³, 256² images, 1024 rays per pixel.
+    /// Paper-scale settings: the baseline at 64³ to 256³, the filtered representations at 128³
+    /// and 256³ ([`FilteredConfig::full`]), 256² images, 1024 rays per pixel, four views.
     pub fn full() -> Self {
         Self {
             resolutions: vec![64, 128, 256],

@@ -356,7 +356,8 @@ pub struct VirtualMeshParams {
     /// of the footprint its layer of sub-cells covers, design note §6). Off by default: a
     /// voxel's opacity composes with its neighbours' as if uncorrelated, so a flat surface seen
     /// at a grazing angle (a ground, leaves), which the ray crosses over many weakly opaque
-    /// voxels, lets light through that the surface stops; the report measures both (README).
+    /// voxels, lets light through that the surface stops; the filtered-appearance study of
+    /// voxlod-studies measures both.
     pub projected_area: bool,
 }
 

@@ -64,26 +64,13 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// The build preset, chosen by measurement on this 2-core machine: obvhs's `slow_build`
-    /// (PLOC with spatial pre-splits and more reinsertion). It traces fastest in every view,
-    /// by 10–30 % over `medium_build`, for about twice its build time; the ground truth casts
-    /// hundreds of millions of rays per image, so tracing dominates. Where builds dominate
-    /// (a BVH rebuilt per frame), pass a faster preset to [`Bvh::with_params`].
-    ///
-    /// Single core, CPU time (other processes on the machine excluded), two runs of
-    /// `VOXLOD_BENCH_PRESETS=1 cargo bench -p voxlod-cpu --bench raycast`: builds of the bunny
-    /// (3 674 triangles) and of the forest (1.0 M triangles); traces of 512×512 camera rays in
-    /// 2×2 packets, in million rays per CPU-second, on the bunny's framing view (21 % of the
-    /// rays hit), its close-up (all hit) and the forest's framing view.
-    ///
-    /// | preset | build bunny | build forest | bunny framing | bunny close-up | forest framing |
-    /// |---|---|---|---|---|---|
-    /// | `fastest_build` | 3.5 ms | 1.50–1.55 s | 8.4–8.6 | 3.5–3.8 | 4.6–5.1 |
-    /// | `very_fast_build` | 2.3–2.4 ms | 1.17–1.34 s | 8.6–9.2 | 3.6–5.2 | 5.6–5.9 |
-    /// | `fast_build` | 2.8–2.9 ms | 1.62–1.71 s | 9.2–10.0 | 3.4–3.6 | 5.8–6.5 |
-    /// | `medium_build` | 2.6–3.0 ms | 1.67–1.86 s | 9.4–9.7 | 4.0–4.2 | 5.9–6.4 |
-    /// | **`slow_build`** | 4.8–5.7 ms | 3.30–3.55 s | 10.6–13.7 | 4.2–5.1 | 6.6–7.8 |
-    /// | `very_slow_build` | 10.0–12.8 ms | 14.8–15.2 s | 8.2–8.6 | 4.0–4.1 | 5.9–6.2 |
+    /// The build preset: obvhs's `slow_build` (PLOC with spatial pre-splits and more
+    /// reinsertion). It traces fastest of obvhs's presets in every view `benches/raycast.rs`
+    /// measures (the bunny framed and close up, the forest framed), for about twice the build
+    /// time of `medium_build`; the ground truth casts hundreds of millions of rays per image, so
+    /// tracing dominates. Where builds dominate (a BVH rebuilt per frame), pass a faster preset
+    /// to [`Bvh::with_params`]. `VOXLOD_BENCH_PRESETS=1 cargo bench -p voxlod-cpu --bench
+    /// raycast` prints the build and trace times of every preset.
     pub const DEFAULT_PARAMS: BvhBuildParams = BvhBuildParams::slow_build();
 
     /// Builds the BVH with [`Bvh::DEFAULT_PARAMS`].

@@ -1,5 +1,5 @@
-//! Voxel cone tracing on the sparse voxel octree (the cone tracing of the voxel-transformation
-//! SVO paper, §4.5, after Crassin et al. 2011), measured against ray-traced references on the
+//! Voxel cone tracing on the sparse voxel octree (Yalçıner and Sahillioğlu 2020, §4.5, after
+//! Crassin et al. 2011), measured against ray-traced references on the
 //! mesh: AO and one-bounce diffuse indirect light over cone count × aperture × octree depth ×
 //! step, both opacity pre-filters; the light-leaking experiment (a wall of known thickness
 //! between a lit floor and a receiver); and ([`lod`]) primary visibility with level of detail
