@@ -63,6 +63,16 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     }
     assert!(dir.join("report.md").exists());
     assert!(v["lod"].is_null());
+    // The references and the best rows are written out: 8-bit images and linear float data.
+    assert!(v["best_rows"]["ao"].as_str().unwrap().contains("step"), "{v}");
+    assert!(dir.join("assets/cone_references.png").exists());
+    for name in ["ao_reference", "ao_best", "indirect_reference", "indirect_best"] {
+        let bytes =
+            std::fs::read(dir.join(format!("assets/cone_reference_data/{name}.npy"))).unwrap();
+        let (shape, data) = voxlod::eval::npy::decode_f32(&bytes).unwrap();
+        assert_eq!(shape[..2], [16, 16], "{name}");
+        assert!(data.iter().all(|x| x.is_finite() && *x >= 0.0), "{name}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 
     for (args, needle) in [

@@ -307,7 +307,7 @@ proptest! {
     #[test]
     fn secondary_rays_from_a_shared_edge_see_it_from_the_viewer_side(
         angle_deg in 25.0f32..155.0,
-        (yaw, pitch, roll) in (0.0f32..6.28, -1.5f32..1.5, 0.0f32..6.28),
+        (yaw, pitch, roll) in (0.0f32..std::f32::consts::TAU, -1.5f32..1.5, 0.0f32..std::f32::consts::TAU),
         log_scale in -3.0f32..4.0,
         offset in prop::array::uniform3(-100.0f32..100.0),
         u in 0.3f32..0.7,
