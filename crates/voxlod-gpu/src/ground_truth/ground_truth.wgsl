@@ -103,9 +103,9 @@ fn offset_origin(t: ShadeTri, point: vec3<f32>, dir: vec3<f32>, to_viewer: vec3<
         n = select(-n, n, dot(n, dir) >= 0.0);
     }
     let v = normalize_or_zero(to_viewer);
-    let c = dot(n, v);
-    if c >= 1.0 / 64.0 {
-        return point + v * (eps / c);
+    let cos_v = dot(n, v);
+    if cos_v >= 1.0 / 64.0 {
+        return point + v * (eps / cos_v);
     }
     return point + n * eps;
 }
