@@ -25,7 +25,7 @@ use crate::Error;
 /// Occupancy and colour of one method against one re-voxelization.
 #[derive(Clone, Debug, Serialize)]
 pub struct AgreementRow {
-    /// Animation time, seconds (NaN for a rotation row).
+    /// Animation time, seconds.
     pub time_s: f32,
     /// Which objects: `skinned`, `rigid` or `all`.
     pub objects: String,
@@ -64,6 +64,14 @@ pub struct ImageRow {
     pub indirect_mse: f64,
     /// Indirect SSIM.
     pub indirect_ssim: f64,
+    /// AO: MSE against the re-voxelized octree's cone-traced AO (0 for that row itself).
+    pub ao_mse_revoxelized: f64,
+    /// AO SSIM against the re-voxelized octree's AO.
+    pub ao_ssim_revoxelized: f64,
+    /// Indirect light: MSE against the re-voxelized octree's cone-traced indirect light.
+    pub indirect_mse_revoxelized: f64,
+    /// Indirect SSIM against the re-voxelized octree's.
+    pub indirect_ssim_revoxelized: f64,
 }
 
 /// Occupancy of one rigid object at an exact rotation against its re-voxelization.
@@ -159,13 +167,23 @@ pub struct AgreementSettings<'a> {
     pub build: BuildOptions,
 }
 
+/// What the agreement part measured.
+pub struct Agreement {
+    /// Occupancy and colour rows.
+    pub rows: Vec<AgreementRow>,
+    /// Image rows.
+    pub images: Vec<ImageRow>,
+    /// The AO images, one set per time.
+    pub sets: Vec<ImageSet>,
+}
+
 /// The agreement rows, image rows and image sets of `prepared` (one per voxelizer, same
 /// scene), at every time.
 pub fn run(
     prepared: &[(Mode, Prepared)],
     s: &AgreementSettings,
     say: &dyn Fn(&str),
-) -> Result<(Vec<AgreementRow>, Vec<ImageRow>, Vec<ImageSet>), Error> {
+) -> Result<Agreement, Error> {
     let (mut rows, mut image_rows, mut sets) = (Vec::new(), Vec::new(), Vec::new());
     let first = &prepared[0].1;
     let light = super::setup::cone_light(first.ds.scene.light());
@@ -246,9 +264,14 @@ pub fn run(
                     "re-voxelized".into(),
                     revoxelized_octree(&p.world, &reference.records, &s.build)?,
                 ));
+                let mut traced = Vec::with_capacity(octrees.len());
                 for (method, tree) in &octrees {
                     let (ao, e) = inject_and_trace(tree, &light, &gb, trace)?;
-                    let (ao_img, ind_img) = (gray(&gb, &ao), colour(&gb, &e));
+                    traced.push((method, gray(&gb, &ao), colour(&gb, &e)));
+                }
+                // The re-voxelized octree's images (the last) are the second reference.
+                let (_, ao_revox, ind_revox) = traced.last().cloned().expect("three octrees");
+                for (method, ao_img, ind_img) in traced {
                     image_rows.push(ImageRow {
                         time_s: time,
                         voxelizer: vname.clone(),
@@ -257,6 +280,10 @@ pub fn run(
                         ao_ssim: voxlod_eval::ssim(&ao_img, &ao_ref)?,
                         indirect_mse: voxlod_eval::mse(&ind_img, &ind_ref)?,
                         indirect_ssim: voxlod_eval::ssim(&ind_img, &ind_ref)?,
+                        ao_mse_revoxelized: voxlod_eval::mse(&ao_img, &ao_revox)?,
+                        ao_ssim_revoxelized: voxlod_eval::ssim(&ao_img, &ao_revox)?,
+                        indirect_mse_revoxelized: voxlod_eval::mse(&ind_img, &ind_revox)?,
+                        indirect_ssim_revoxelized: voxlod_eval::ssim(&ind_img, &ind_revox)?,
                     });
                     set.images.push((format!("{} {method}", mode_name(*mode)), ao_img));
                 }
@@ -264,7 +291,7 @@ pub fn run(
         }
         sets.push(set);
     }
-    Ok((rows, image_rows, sets))
+    Ok(Agreement { rows, images: image_rows, sets })
 }
 
 /// The rotations measured: exactly 45° about each axis, and two others.

@@ -332,7 +332,8 @@ pub fn run(
         ao_radius: config.ao_radius,
         build: BuildOptions::default(),
     };
-    let (agreement_rows, image_rows, image_sets) = agreement::run(&prepared, &settings, say)?;
+    let agreement::Agreement { rows: agreement_rows, images: image_rows, sets: image_sets } =
+        agreement::run(&prepared, &settings, say)?;
     let rotations = if config.rotations {
         agreement::rotation_rows(
             &prepared,
@@ -467,7 +468,7 @@ impl DynamicResult {
         }
         out.push(t);
         let mut t = Table::new(
-            "cone-traced AO and indirect light against ray-traced references of the posed mesh",
+            "cone-traced AO and indirect light against the ray-traced posed mesh and the re-voxelized octree",
             vec![
                 num("t (s)", NumberFormat::Fixed(2)),
                 Column::text("voxelizer"),
@@ -476,6 +477,10 @@ impl DynamicResult {
                 num("AO SSIM", NumberFormat::Fixed(3)),
                 num("indirect MSE", NumberFormat::Significant(3)),
                 num("indirect SSIM", NumberFormat::Fixed(3)),
+                num("AO MSE vs re-vox.", NumberFormat::Significant(3)),
+                num("AO SSIM vs re-vox.", NumberFormat::Fixed(3)),
+                num("indirect MSE vs re-vox.", NumberFormat::Significant(3)),
+                num("indirect SSIM vs re-vox.", NumberFormat::Fixed(3)),
             ],
         );
         for r in &self.images {
@@ -487,6 +492,10 @@ impl DynamicResult {
                 Cell::Number(r.ao_ssim),
                 Cell::Number(r.indirect_mse),
                 Cell::Number(r.indirect_ssim),
+                Cell::Number(r.ao_mse_revoxelized),
+                Cell::Number(r.ao_ssim_revoxelized),
+                Cell::Number(r.indirect_mse_revoxelized),
+                Cell::Number(r.indirect_ssim_revoxelized),
             ])?;
         }
         out.push(t);

@@ -1,6 +1,8 @@
 //! Temporal stability (the paper's flicker claim): one rigid object moving slowly above the
 //! static floor — a fraction of a voxel and half a degree per frame — and the ambient occlusion
 //! it casts on fixed shading points of the floor, cone traced through each frame's octree. The
+//! object is first lowered (or raised) so that its lowest point hovers a quarter of the AO
+//! radius above the static surface under its centre: the AO it casts then reaches the floor. The
 //! measure is the mean absolute difference of AO between consecutive frames (over the floor's
 //! pixels): the true change is small and smooth, so what a method adds to it is flicker. The
 //! ray-traced AO of the moving mesh (same rays every frame) gives the true change.
@@ -89,13 +91,27 @@ pub fn run(
             continue;
         }
         let floor_bvh = Bvh::new(&floor_geometry)?;
-        let target = Vec3::new(world_centre.x as f32, 0.0, world_centre.z as f32);
+        // The static surface under the object's centre, and how far to move the object down
+        // so its lowest point hovers a quarter of the AO radius above it.
+        let Some(below) =
+            floor_bvh.intersect(world_centre.as_vec3(), Vec3::NEG_Y, 0.0, f32::INFINITY)
+        else {
+            continue;
+        };
+        let floor_y = world_centre.y - below.t as f64;
+        let lowest = g
+            .positions
+            .iter()
+            .map(|v| rest.transform_point3(v.as_dvec3()).y)
+            .fold(f64::INFINITY, f64::min);
+        let drop = lowest - (floor_y + 0.25 * s.ao_radius as f64);
+        let target = Vec3::new(world_centre.x as f32, floor_y as f32, world_centre.z as f32);
         let eye = target + Vec3::new(0.0, 2.5, 1.5) * (hi - lo).length().max(0.5);
         let camera = Camera::look_at(eye, target, Vec3::Y, 45.0);
         let (w, h) = (s.image_width, (s.image_width * 3 / 4).max(1));
         let gb = ground_truth::gbuffer(&statics, &floor_geometry, &floor_bvh, &camera, w, h)?;
         let placement = |k: u32| {
-            let shift = DVec3::new(k as f64 * s.voxels_per_frame * p.grid.voxel_size, 0.0, 0.0);
+            let shift = DVec3::new(k as f64 * s.voxels_per_frame * p.grid.voxel_size, -drop, 0.0);
             let turn = DMat4::from_rotation_y((k as f64 * s.degrees_per_frame).to_radians());
             DMat4::from_translation(shift)
                 * rest
