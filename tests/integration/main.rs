@@ -2,6 +2,7 @@
 
 mod cli;
 mod cone;
+mod dynamic;
 mod scene_files;
 mod volume;
 
