@@ -169,7 +169,7 @@ impl GpuMedium for Directional<AveragePayload> {
     }
 }
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`; see there for the fields).
+/// The kernel's parameters (mirrors WGSL `Params`; see there for the fields).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuConeParams {
@@ -503,7 +503,7 @@ impl<'a> ConeKernel<'a> {
             .collect())
     }
 
-    /// The uniform parameters, every constant computed on the host exactly as voxlod-cone
+    /// The parameters, every constant computed on the host exactly as voxlod-cone
     /// computes it (same `f32` expressions).
     fn params(
         &self,

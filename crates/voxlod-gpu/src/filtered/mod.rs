@@ -120,7 +120,7 @@ use crate::{Context, Error, Result, light_words};
 /// The WGSL source of the kernel: shading, then the renderer.
 pub const WGSL: &str = concat!(include_str!("../shading.wgsl"), include_str!("filtered.wgsl"));
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuFilteredParams {

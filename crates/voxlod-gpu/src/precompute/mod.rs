@@ -124,7 +124,7 @@ pub const VOXELS_PER_DISPATCH: u32 = 1 << 14;
 /// least one voxel).
 pub const LINES_PER_DISPATCH: u64 = 1 << 22;
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuPrecomputeParams {

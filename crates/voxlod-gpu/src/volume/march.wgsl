@@ -34,7 +34,7 @@ struct Entry {
     flags: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> order: array<Entry>;
 @group(0) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> depth: array<f32>;

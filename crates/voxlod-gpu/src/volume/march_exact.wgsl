@@ -22,7 +22,7 @@ struct Params {
     mode: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 // K³ entries (key order (i·K + j)·K + k): the slot of a kept metavoxel, or 0xffffffff.
 @group(0) @binding(1) var<storage, read> index: array<u32>;
 @group(0) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
