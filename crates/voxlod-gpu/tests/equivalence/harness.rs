@@ -381,7 +381,7 @@ pub fn main(
     }
     println!("\n{t}");
     let path = target_dir().join("equivalence.txt");
-    if let Err(e) = std::fs::create_dir_all(target_dir()).and_then(|_| std::fs::write(&path, &t)) {
+    if let Err(e) = voxlod_format::io::write_atomic(&path, |w| w.write_all(t.as_bytes())) {
         eprintln!("could not write {}: {e}", path.display());
     }
     conclusion.exit_code()
