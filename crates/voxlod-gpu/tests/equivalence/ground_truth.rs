@@ -171,7 +171,7 @@ pub fn property(backend: &Executor) -> Result<Measure, String> {
     };
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
     let mut runner = TestRunner::new_with_rng(
-        Config { cases, ..Config::default() },
+        Config { cases, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let strategy = (

@@ -391,7 +391,7 @@ pub fn property(backend: &Executor) -> Result<Measure, String> {
     );
     let b = builder(backend)?;
     let mut runner = TestRunner::new_with_rng(
-        Config { cases: 48, ..Config::default() },
+        Config { cases: 48, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let worst = RefCell::new((0u64, 0.0f64, String::new()));

@@ -233,7 +233,7 @@ pub fn property(backend: &Executor) -> Result<Measure, String> {
     let kernel = kernel(backend)?;
     // The same cases on every backend: a fixed seed (PROPTEST_CASES sets how many).
     let mut runner = TestRunner::new_with_rng(
-        Config::default(),
+        Config { failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let cases = RefCell::new(Vec::new());

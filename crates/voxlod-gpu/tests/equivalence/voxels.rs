@@ -313,7 +313,7 @@ fn property(backend: &Executor, grids: &[Grid]) -> Result<Measure, String> {
     };
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
     let mut runner = TestRunner::new_with_rng(
-        Config { cases, ..Config::default() },
+        Config { cases, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let v3 = || (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0);
