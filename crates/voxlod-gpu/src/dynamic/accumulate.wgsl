@@ -4,7 +4,7 @@
 // sum modulo 2^64 in any order (blend.rs's `CellSums`, 16 words per voxel: weight, alpha,
 // colour ×3, normal ×3). A world voxel's sums sit at 8·slot(brick) + octant.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> placed: array<Placed>;
 @group(0) @binding(2) var<storage, read> records: array<u32>;
 @group(0) @binding(3) var<storage, read> slots: array<u32>;

@@ -12,7 +12,7 @@ struct Average {
     opacity: f32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> sums: array<u32>;
 @group(0) @binding(2) var<storage, read> slot_code: array<u32>;
 @group(0) @binding(3) var<storage, read_write> occupied: array<u32>;

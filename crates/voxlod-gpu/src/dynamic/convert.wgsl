@@ -14,7 +14,7 @@ struct Radiance {
     opacity: f32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> average: array<Average>;
 @group(0) @binding(2) var<storage, read_write> radiance: array<Radiance>;
 

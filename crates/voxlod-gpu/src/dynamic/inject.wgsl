@@ -26,7 +26,7 @@ struct InjectParams {
     counts: vec4<u32>,
 }
 
-@group(0) @binding(8) var<uniform> ip: InjectParams;
+@group(0) @binding(8) var<storage, read> ip: InjectParams;
 @group(0) @binding(9) var<storage, read> leaf_coords: array<u32>;
 @group(0) @binding(10) var<storage, read> leaves: array<Leaf>;
 @group(0) @binding(11) var<storage, read_write> injected: array<Leaf>;

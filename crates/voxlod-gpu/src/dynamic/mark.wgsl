@@ -2,7 +2,7 @@
 // one per cell — sets the flag of the 2×2×2 brick its world voxel lies in (flags indexed by
 // the brick's Morton code; relaxed stores, every writer writes 1).
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> placed: array<Placed>;
 @group(0) @binding(2) var<storage, read> cells: array<u32>;
 @group(0) @binding(3) var<storage, read_write> flags: array<atomic<u32>>;

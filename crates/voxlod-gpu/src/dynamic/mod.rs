@@ -101,7 +101,8 @@ pub fn inject_source() -> String {
     format!("{}\n{functions}\n{}", crate::cone::ISOTROPIC_WGSL, include_str!("inject.wgsl"))
 }
 
-/// The kernels' uniform parameters (mirrors WGSL `Params` of `common.wgsl`). 32 bytes.
+/// The kernels' parameters, bound as read-only storage (mirrors WGSL `Params` of
+/// `common.wgsl`). 32 bytes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuDynamicParams {
@@ -241,7 +242,7 @@ impl<'a> DynamicKernels<'a> {
         &self.cone
     }
 
-    /// Records one dispatch of `pipeline` over `invocations` with the uniform `params` at
+    /// Records one dispatch of `pipeline` over `invocations` with the parameters `params` at
     /// binding 0 and `entries`.
     fn dispatch(
         &self,

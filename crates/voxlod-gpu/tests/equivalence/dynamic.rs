@@ -47,7 +47,7 @@ use voxlod_octree::dynamic::{
 };
 use voxlod_octree::{AveragePayload, FlatOctree, Octree, Payload};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 /// Largest distance (voxels) of a voxel whose cell or fraction differs from the boundary it
 /// crossed.
@@ -265,15 +265,15 @@ impl Transformed {
     }
 }
 
-fn kernels<'a>(backend: &Backend<'a>) -> Result<Option<DynamicKernels<'a>>, String> {
+fn kernels<'a>(backend: &Executor<'a>) -> Result<Option<DynamicKernels<'a>>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => DynamicKernels::new(ctx).map(Some).map_err(|e| e.to_string()),
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => DynamicKernels::new(ctx).map(Some).map_err(|e| e.to_string()),
     }
 }
 
 /// Transform: GPU against CPU; the CPU row, CPU against an `f64` oracle.
-pub fn transform_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn transform_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let e = |e: voxlod_gpu::Error| e.to_string();
     let mut tally = Transformed::default();
@@ -416,7 +416,7 @@ fn cpu_blend(c: &Case, placed: &[Placed], filter: Filter) -> (Leaves, Vec<(u64, 
 }
 
 /// Blend: the CPU's moved voxels blended on the GPU, exact; plus the control.
-pub fn blend_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn blend_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let e = |e: voxlod_gpu::Error| e.to_string();
     let (mut differ, mut worst_payload, mut leaves_total, mut control_differ) =
@@ -589,7 +589,7 @@ fn topology_diff(a: &FlatOctree<AveragePayload>, e: &FlatOctree<AveragePayload>)
 }
 
 /// Rebuild: the GPU's octree from its own leaves against the CPU's from the CPU's leaves.
-pub fn rebuild_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn rebuild_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let e = |e: voxlod_gpu::Error| e.to_string();
     let (mut differ, mut worst, mut control_caught, mut nodes) = (0u64, 0.0f64, 0u64, 0usize);
@@ -665,10 +665,10 @@ pub fn rebuild_scenes(backend: &Backend) -> Result<Measure, String> {
     })
 }
 
-fn k_ctx<'a>(backend: &Backend<'a>) -> &'a voxlod_gpu::Context {
+fn k_ctx<'a>(backend: &Executor<'a>) -> &'a voxlod_gpu::Context {
     match backend {
-        Backend::Gpu(ctx) => ctx,
-        Backend::Cpu => unreachable!("GPU rows only"),
+        Executor::Gpu(ctx) => ctx,
+        Executor::Cpu => unreachable!("GPU rows only"),
     }
 }
 
@@ -711,7 +711,7 @@ fn cpu_injected(c: &Case, shadows: &Shadows) -> Vec<[f32; 4]> {
 }
 
 /// Inject: the GPU's radiance per leaf against the CPU's; plus the control.
-pub fn inject_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn inject_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let e = |e: voxlod_gpu::Error| e.to_string();
     let (mut tally, mut control) = (Tally::default(), Tally::default());
@@ -768,7 +768,7 @@ pub fn inject_scenes(backend: &Backend) -> Result<Measure, String> {
             }
         }
     }
-    let caught = !control.passes() || matches!(backend, Backend::Cpu);
+    let caught = !control.passes() || matches!(backend, Executor::Cpu);
     Ok(Measure {
         max_error: tally.worst,
         bound: BOUND,
@@ -777,7 +777,7 @@ pub fn inject_scenes(backend: &Backend) -> Result<Measure, String> {
             "{}; control (step ×1.05): {} → {}",
             tally.note(),
             control.note(),
-            if matches!(backend, Backend::Cpu) {
+            if matches!(backend, Executor::Cpu) {
                 "n/a on the CPU row"
             } else if caught {
                 "caught"
@@ -789,7 +789,7 @@ pub fn inject_scenes(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Frame: the whole frame on the device, cone traced, against the CPU pipeline and tracer.
-pub fn frame_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn frame_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let e = |e: voxlod_gpu::Error| e.to_string();
     let c = &cases()[0];
