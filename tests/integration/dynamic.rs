@@ -118,6 +118,7 @@ fn dynamic_command_measures_transformation_against_revoxelization() {
     assert_eq!(frames.len(), 2);
     assert!(frames.iter().all(|r| r["leaves"].as_u64().unwrap() > 0), "{frames:?}");
     assert_eq!(v["backend"], "cpu (rayon)");
+    assert!(!v["machine"].as_str().unwrap().is_empty());
     assert!(dir.join("report.md").exists());
     let _ = std::fs::remove_dir_all(&dir);
 

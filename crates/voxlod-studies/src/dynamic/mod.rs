@@ -254,6 +254,8 @@ pub struct DynamicResult {
     pub scene: String,
     /// Where the frame sequence and the scaling part's GPU column ran.
     pub backend: String,
+    /// The machine the times were measured on (CPU model, cores, OS).
+    pub machine: String,
     /// The world grid of the agreement part, voxels per axis.
     pub grid: [u32; 3],
     /// Its voxel edge, world units.
@@ -381,6 +383,7 @@ pub fn run(
     Ok(DynamicResult {
         scene: config.scene.clone(),
         backend: backend.describe(),
+        machine: crate::machine::describe(),
         grid: first.grid.dims.to_array(),
         voxel_size: first.grid.voxel_size,
         records: match config.records {
@@ -647,14 +650,20 @@ impl DynamicResult {
     pub fn add_to_report(&self, r: &mut Report) -> Result<(), Error> {
         r.heading(2, format!("Dynamic scenes by voxel transformation: {}", self.scene));
         r.text(format!(
-            "World grid {}×{}×{} of {} world units; records: {}. Moving objects are voxelized \
+            "Measured on {}. World grid {}×{}×{} of {} world units; records: {}. Moving objects are voxelized \
              once into object-space caches and moved every frame (nearest: the world voxel of the \
              moved centre; 8-neighbour: split over the eight around it by the volume each \
              covers, a world voxel occupied when half of it is covered), against re-voxelizing the \
              posed meshes with the same voxelizer. Frames ran on {}. Times are wall-clock \
              on a machine shared with other work (on a CPU adapter such as lavapipe, CPU times \
              of the GPU path).",
-            self.grid[0], self.grid[1], self.grid[2], self.voxel_size, self.records, self.backend
+            self.machine,
+            self.grid[0],
+            self.grid[1],
+            self.grid[2],
+            self.voxel_size as f32,
+            self.records,
+            self.backend
         ));
         for t in self.tables()? {
             r.table(t);
