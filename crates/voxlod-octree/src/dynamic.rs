@@ -1,11 +1,11 @@
 //! Moving objects by **voxel transformation** (Yalçıner and Sahillioğlu 2020, §3 and §4.2):
 //! each object is voxelized once in its own space into a [`VoxelCache`]; every frame its voxels
-//! are moved into the world grid by a rigid matrix or by linear blend skinning ([`transform`]),
-//! split over world voxels by one of the paper's two filters and blended in fixed point
-//! ([`blend`]), merged with the static voxels, and the octree is rebuilt from the result
-//! ([`DynamicWorld`]). Building caches from meshes (voxelization, Averages records, skin
-//! weights) is voxlod-cpu's `dynamic` module; the wgpu kernels are voxlod-gpu's `dynamic`
-//! module, which mirrors the arithmetic written here.
+//! are moved into the world grid by a rigid matrix or by linear blend skinning
+//! ([`transform`][mod@transform]), split over world voxels by one of the paper's two filters
+//! and blended in fixed point ([`blend`][mod@blend]), merged with the static voxels, and the
+//! octree is rebuilt from the result ([`DynamicWorld`]). Building caches from meshes
+//! (voxelization, Averages records, skin weights) is voxlod-cpu's `dynamic` module; the wgpu
+//! kernels are voxlod-gpu's `dynamic` module, which mirrors the arithmetic written here.
 //!
 //! # Caches ([`cache`])
 //! - A cached voxel's position is its integer index in the object's own grid, whose origin is
@@ -18,7 +18,7 @@
 //!   `voxel_size · scale` world units, which must equal the world grid's voxel
 //!   ([`Error::CacheResolution`]).
 //!
-//! # Placement ([`place`], on the host in `f64`)
+//! # Placement ([`place`][mod@place], on the host in `f64`)
 //! A rigid object has one object-to-world matrix per frame, a skinned one a matrix per joint
 //! (bind space to world: the joint's world matrix times its inverse bind matrix). Each must be
 //! finite and **rigid at the cache's scale**: its three linear columns of length `scale` and
@@ -32,7 +32,7 @@
 //! grid origin, so a huge translation costs no precision. An anchor beyond ±2³⁰ voxels puts
 //! the whole object outside the grid: its voxels are counted as clipped and not transformed.
 //!
-//! # Transform ([`transform`], per voxel in `f32`, the GPU kernel's arithmetic)
+//! # Transform ([`transform`][mod@transform], per voxel in `f32`, the GPU kernel's arithmetic)
 //! - Rigid: `r = M·i + t`. Skinned: the blended matrix `Σ (w_k/255)·M_k` (in slot order, from
 //!   zero), then `r = M·i + t` — linear blend skinning; the weights were interpolated and
 //!   renormalized when the cache was built.
@@ -45,7 +45,7 @@
 //! - A non-finite `r`, or one beyond ±2²³ voxels (where `f32` stops holding integers), is
 //!   outside.
 //!
-//! # Blend ([`blend`], exact integers: the result does not depend on the order)
+//! # Blend ([`blend`][mod@blend], exact integers: the result does not depend on the order)
 //! A moved voxel contributes to each world voxel it covers the volume it covers there, in units
 //! of 2⁻¹⁸ voxel: the trilinear weight `w = wx·wy·wz` (`wx = 64 − fx` for the lower, `fx` for
 //! the upper neighbour) — exactly the overlap of the moved voxel's axis-aligned box with each
@@ -64,6 +64,11 @@
 //! of them are not transparent (`A > 0`). Its payload: opacity `min(1, A / (255·2¹⁸))` — the
 //! covered volume adjusts the opacity, as the paper's §3.3 says — colour `C / (4095·A)`, normal
 //! `N/|N|`. With the nearest filter every touched voxel is occupied.
+//!
+//! [`Error::CacheTooLarge`]: crate::Error::CacheTooLarge
+//! [`Error::CacheResolution`]: crate::Error::CacheResolution
+//! [`Error::NotRigid`]: crate::Error::NotRigid
+//! [`Error::FrameTooLarge`]: crate::Error::FrameTooLarge
 
 pub mod blend;
 pub mod cache;

@@ -374,7 +374,7 @@ impl<'a> DynamicKernels<'a> {
     }
 
     /// Moves every cached voxel by `frames` (one per object, from
-    /// [`voxlod_octree::dynamic::place`]), left on the device: one [`Placed`] per voxel.
+    /// [`voxlod_octree::dynamic::place()`]), left on the device: one [`Placed`] per voxel.
     pub fn transform(
         &self,
         scene: &GpuDynamicScene,
