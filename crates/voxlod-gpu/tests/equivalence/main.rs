@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`materials`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`]),
+//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`], [`slicemap`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -21,6 +21,7 @@ mod octree;
 mod precompute;
 mod random;
 mod raycast;
+mod slicemap;
 mod volume;
 mod voxelize;
 mod voxels;
@@ -84,6 +85,10 @@ fn equivalence_suite() {
         suite.run("volume frame (extremes)", backend, volume::extremes);
         suite.run("volume control (must fail)", backend, volume::control);
         suite.run("volume errors", backend, volume::errors);
+        suite.run("slicemap (scenes)", backend, slicemap::scenes);
+        suite.run("slicemap (proptest)", backend, slicemap::property);
+        suite.run("slicemap queries (scenes)", backend, slicemap::queries);
+        suite.run("slicemap control (must fail)", backend, slicemap::control);
     }
     suite.finish();
 }
