@@ -159,9 +159,9 @@ impl SliceCamera {
         Ok(camera)
     }
 
-    /// An orthographic map looking along `direction` that encloses the box `[lo, hi]` with
-    /// columns of square pixels, `longest` columns along the longer side; `near` and `far`
-    /// touch the box.
+    /// An orthographic map looking along `direction` that encloses the box `[lo, hi]` (grown by
+    /// a thousandth of its extent) with columns of square pixels, `longest` columns along the
+    /// longer side.
     pub fn enclosing_orthographic(direction: DVec3, lo: DVec3, hi: DVec3, longest: u32) -> Self {
         let forward = direction.normalize_or(DVec3::NEG_Z);
         let up0 = if forward.y.abs() > 0.99 { DVec3::Z } else { DVec3::Y };
@@ -170,7 +170,9 @@ impl SliceCamera {
         let centre = (lo + hi) * 0.5;
         let half = (hi - lo) * 0.5;
         let reach = |a: DVec3| half.x * a.x.abs() + half.y * a.y.abs() + half.z * a.z.abs();
-        let (hx, hy, hz) = (reach(right).max(1e-30), reach(up).max(1e-30), reach(forward));
+        // A margin of 1/1000 of the extent keeps near < far for flat scenes.
+        let pad = 1e-3 * (reach(right) + reach(up) + reach(forward)) + 1e-30;
+        let (hx, hy, hz) = (reach(right) + pad, reach(up) + pad, reach(forward) + pad);
         let longest = longest.clamp(1, MAX_SIDE);
         let (width, height) = if hx >= hy {
             (longest, ((longest as f64 * hy / hx).ceil() as u32).max(1))
@@ -189,7 +191,7 @@ impl SliceCamera {
             width,
             height,
             near: -hz,
-            far: hz.max(-hz + 1e-30),
+            far: hz,
         }
     }
 

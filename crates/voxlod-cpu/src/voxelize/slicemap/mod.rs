@@ -40,6 +40,7 @@ pub mod camera;
 pub mod compare;
 pub mod query;
 pub mod raster;
+pub mod shadow;
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
