@@ -174,7 +174,8 @@ fn square_meets(e: &[Edge; 3], area2: i64, x: i64, y: i64) -> bool {
 }
 
 /// The range `[q_lo, q_hi]` of `q` over the triangle ∩ the closed square of pixel `(x, y)`
-/// (module docs), or `None` if they do not meet (never after [`square_meets`] said they do).
+/// (module docs), or `None` if they do not meet (never for a pixel the conservative rule
+/// covers).
 pub fn q_range_in_square(t: &SliceTriangle, x: u32, y: u32) -> Option<(f32, f32)> {
     let (sx0, sy0) = (x as i64 * SUBPIXEL, y as i64 * SUBPIXEL);
     let (sx1, sy1) = (sx0 + SUBPIXEL, sy0 + SUBPIXEL);
