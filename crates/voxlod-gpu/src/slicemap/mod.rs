@@ -109,6 +109,7 @@ pub struct SlicemapRenderer<'a> {
     layout: wgpu::BindGroupLayout,
     standard: wgpu::RenderPipeline,
     conservative: wgpu::RenderPipeline,
+    batch: usize,
 }
 
 impl<'a> SlicemapRenderer<'a> {
@@ -202,7 +203,17 @@ impl<'a> SlicemapRenderer<'a> {
                 let conservative = pipeline("vs_conservative", "fs_conservative");
                 (layout, standard, conservative)
             })?;
-        Ok(Self { ctx, layout, standard, conservative })
+        let record = size_of::<SliceTriangle>() as u64;
+        let batch = (ctx.limits().max_storage_buffer_binding_size / record).clamp(1, 1 << 24);
+        Ok(Self { ctx, layout, standard, conservative, batch: batch as usize })
+    }
+
+    /// Draws at most `triangles` (≥ 1) records per draw call (default: as many as one storage
+    /// binding holds, up to 2^24): smaller draws for drivers that time out on long ones, and
+    /// for testing the batching.
+    pub fn with_batch(mut self, triangles: usize) -> Self {
+        self.batch = triangles.clamp(1, self.batch);
+        self
     }
 
     /// Rasterizes `geometry` into the slicemap of `camera` on the GPU (module docs); the same
@@ -275,15 +286,12 @@ impl<'a> SlicemapRenderer<'a> {
             })
         })?;
         let view = target.create_view(&Default::default());
-        // Batches of triangles that fit one storage binding.
-        let record = size_of::<SliceTriangle>() as u64;
-        let per_batch = (ctx.limits().max_storage_buffer_binding_size / record).clamp(1, 1 << 24);
         let (pipeline, per_tri) = match options.coverage {
             Coverage::Standard => (&self.standard, 3u32),
             Coverage::Conservative => (&self.conservative, 6u32),
         };
         let mut batches = Vec::new();
-        for chunk in triangles.chunks(per_batch as usize) {
+        for chunk in triangles.chunks(self.batch) {
             batches.push((
                 ctx.storage_init("slicemap triangles", bytemuck::cast_slice(chunk))?,
                 chunk.len(),

@@ -285,6 +285,10 @@ pub fn scenes(backend: &Backend) -> Result<Measure, String> {
     for (name, g, cam, o) in &cases {
         measures.push(case(&k, name, g, cam, o)?.0);
     }
+    // The same soup in draws of 7 triangles (the batching path).
+    let small = k.map(|(r, q)| (r.with_batch(7), q));
+    let o = opts(64, Slicing::Local, Coverage::Conservative, Faces::Split);
+    measures.push(case(&small, "soup in batches of 7", &soup, &soup_camera(true, 40, 30), &o)?.0);
     Ok(Measure::combine(&measures))
 }
 
