@@ -359,5 +359,4 @@ pub fn traversed_length(
 }
 
 #[cfg(test)]
-#[path = "shadow_tests.rs"]
 mod tests;
