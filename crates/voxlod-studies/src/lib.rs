@@ -14,6 +14,7 @@
 //! | [`baseline`] | ground truth and its noise, voxelization, the voxel baseline (opaque cubes of average colour) per resolution |
 //! | [`filtered`] | the filtered-appearance representations of Brito, Poulin and Teichrieb (2023): Averages, \[VJK21\], virtual mesh + opacity subgrid, Adaptive |
 //! | [`volume`] | procedural participating media with metavoxels (McNabb, GPU Pro): attenuation models, metavoxel sizes, memory |
+//! | [`slicemap`] | slicemaps (Eisemann and Décoret 2006): holes against the exact voxelizers, transmittance shadow maps against ray-traced transmittance, the traversed volume for refraction against ray-cast intervals |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
@@ -56,6 +57,7 @@ mod ground_truths;
 pub mod machine;
 pub mod report;
 pub mod scenes;
+pub mod slicemap;
 pub mod spread;
 pub mod views;
 pub mod volume;
