@@ -152,6 +152,7 @@ impl SlicemapConfig {
                 height: 256,
                 slices: vec![32, 64, 128, 256, 512],
                 shown_slices: 32,
+                views: 3,
                 bend: 0.6,
                 absorption: 1.5,
                 blur: 0.4,
@@ -238,6 +239,9 @@ impl SlicemapConfig {
         if let Some(r) = &self.refraction {
             if !slices_ok(&r.slices) {
                 return bad("refraction.slices", format!("{:?}", r.slices), "counts in 1..=512");
+            }
+            if r.views == 0 {
+                return bad("refraction.views", "0".into(), "at least one view");
             }
             if !side_ok(r.width) || !side_ok(r.height) {
                 return bad(
@@ -583,8 +587,9 @@ impl SlicemapResult {
                 )
             };
             report.text(format!(
-                "{} ({closed}): {} pixels see it, mean exact thickness {:.4}.",
-                r.scene, r.pixels, r.mean_thickness
+                "{} ({closed}): {} pixels over {} views see it, mean exact thickness {:.4}; \
+             images of the first view, effect metrics averaged over the views.",
+                r.scene, r.pixels, r.views, r.mean_thickness
             ));
             report.table(tables.next().expect("thickness table"));
             report.table(tables.next().expect("effects table"));
@@ -635,6 +640,7 @@ impl SlicemapResult {
                 "scene": r.scene,
                 "boundary_edges": r.boundary_edges,
                 "pixels": r.pixels,
+                "views": r.views,
                 "mean_thickness": r.mean_thickness,
                 "thickness": r.thickness,
                 "effects": r.effects,

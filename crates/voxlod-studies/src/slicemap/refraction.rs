@@ -39,7 +39,7 @@ use voxlod_gpu::slicemap::SlicemapRenderer;
 use voxlod_gpu::slicemap::query::SlicemapQueries;
 use voxlod_scene::{Image, Scene, Srgb8Image};
 
-use super::{Timing, framing_camera, time};
+use super::{Timing, time};
 use crate::Error;
 
 /// What the refraction part measures.
@@ -55,6 +55,8 @@ pub struct RefractionConfig {
     pub slices: Vec<u32>,
     /// Slice count whose effect images are shown.
     pub shown_slices: u32,
+    /// Views: the scene's camera orbited about the vertical axis (their pixels pooled).
+    pub views: u32,
     /// Bending of the refracted ray per unit of `L/r`.
     pub bend: f32,
     /// Absorption per unit of `L/r`.
@@ -108,8 +110,10 @@ pub struct RefractionResult {
     pub scene: String,
     /// Boundary edges of the mesh (0: closed).
     pub boundary_edges: u64,
-    /// Pixels whose ray meets the object.
+    /// Pixels whose ray meets the object, over all views.
     pub pixels: usize,
+    /// Views measured.
+    pub views: u32,
     /// Mean exact thickness over them.
     pub mean_thickness: f64,
     /// Thickness rows: two depth maps, then one per slice count.
@@ -258,26 +262,34 @@ fn row(
     }
 }
 
-/// Runs the refraction part (module docs).
-pub fn run(
-    config: &RefractionConfig,
+/// One view's measurements: per slice count the thickness and slice depth per pixel, the two
+/// depth maps', the exact one, and the images and effect metrics of the shown slice count.
+struct View {
+    exact: Vec<f32>,
+    two: Vec<f32>,
+    sliced: Vec<(u32, Vec<f32>, Vec<f32>)>,
+    timings: Vec<(Timing, Option<Timing>)>,
+    effects: Vec<(String, String, ImageMetrics)>,
+    images: Vec<(String, Srgb8Image)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn view(
+    c: &RefractionConfig,
+    scene: &Scene,
+    g: &voxlod_scene::Geometry,
+    bvh: &Bvh,
+    camera: &voxlod_scene::Camera,
+    first: bool,
     gpu: Option<(&SlicemapRenderer, &SlicemapQueries)>,
     progress: &dyn Fn(&str),
-) -> Result<RefractionResult, Error> {
-    let c = config;
-    progress(&format!("slicemap refraction: {}", c.scene));
-    let scene: Scene = crate::scenes::load(&c.scene)?;
-    let g = scene.geometry();
+) -> Result<View, Error> {
     let (lo, hi) = scene.bounds()?;
-    let small = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 16)?;
-    let solid = vox::Options { mode: Mode::Solid, triangle_lists: false, ..Default::default() };
-    let boundary_edges = vox::voxelize(&g, &small, &solid)?.boundary_edges.unwrap_or(0);
-    let bvh = Bvh::new(&g)?;
-    let camera = scene.default_camera()?;
     let (w, h) = (c.width, c.height);
-    let gb = ground_truth::gbuffer(&scene, &g, &bvh, &camera, w, h)?;
-    let cam: SliceCamera = framing_camera(&scene, w, h)?;
+    let gb = ground_truth::gbuffer(scene, g, bvh, camera, w, h)?;
+    let cam: SliceCamera = camera_through(camera, scene, w, h)?;
     let frame = cam.frame();
+    let forward = frame.forward.as_vec3();
     let rays: Vec<(Vec3, Vec3)> = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
@@ -285,20 +297,16 @@ pub fn run(
             (o.as_vec3(), d.as_vec3())
         })
         .collect();
-    let exact: Vec<f32> =
-        rays.iter().map(|&(o, d)| traversed_length(&bvh, &g, o, d, 0.0)).collect();
-    let pixels = exact.iter().filter(|&&l| l > 0.0).count();
-    if pixels == 0 {
-        return Err(Error::NothingToMeasure {
-            scene: c.scene.clone(),
-            why: "no pixel's ray passes through the object".into(),
-        });
-    }
-    let mean_thickness = exact.iter().map(|&l| l as f64).sum::<f64>() / pixels as f64;
-    let repeats = c.repeats.max(1);
-    let mut thickness = Vec::new();
-    let mut two: Vec<f32> = Vec::new();
-    let mut per_slices: Vec<(u32, Vec<f32>)> = Vec::new();
+    let exact: Vec<f32> = rays.iter().map(|&(o, d)| traversed_length(bvh, g, o, d, 0.0)).collect();
+    let repeats = if first { c.repeats.max(1) } else { 1 };
+    let mut out = View {
+        exact,
+        two: Vec::new(),
+        sliced: Vec::new(),
+        timings: Vec::new(),
+        effects: Vec::new(),
+        images: Vec::new(),
+    };
     for &slices in &c.slices {
         progress(&format!("slicemap refraction: {slices} slices"));
         let o =
@@ -310,8 +318,7 @@ pub fn run(
                 for x in 0..w {
                     let i = (y * w + x) as usize;
                     if let Some((lo, hi)) = map.range(x, y) {
-                        let cos = rays[i].1.dot(frame.forward.as_vec3());
-                        let depth = (hi - lo) / slices as f32 / cos;
+                        let depth = (hi - lo) / slices as f32 / rays[i].1.dot(forward);
                         t[i] = inner(x, y) as f32 * depth;
                         slice[i] = depth;
                     }
@@ -320,56 +327,45 @@ pub fn run(
             (t, slice)
         };
         let ((t, slice, map), cpu_ms) = time(repeats, || {
-            let map = sm::build(&g, &cam, &o)?;
+            let map = sm::build(g, &cam, &o)?;
             let (t, slice) = per_pixel(&map, &|x, y| map.inner_voxels(x, y).unwrap_or(0));
             Ok((t, slice, map))
         })?;
-        let gpu_ms = match gpu {
-            Some((r, q)) => Some(
+        let gpu_ms = match (gpu, first) {
+            (Some((r, q)), true) => Some(
                 time(repeats, || {
-                    let map = r.build(&g, &cam, &o)?;
+                    let map = r.build(g, &cam, &o)?;
                     let inner = q.inner_voxels(&map)?;
                     Ok(per_pixel(&map, &|x, y| inner[(y * w + x) as usize]))
                 })?
                 .1,
             ),
-            None => None,
+            _ => None,
         };
-        if thickness.is_empty() {
+        if out.two.is_empty() {
             // The two-depth-map estimate from the same local ranges.
-            two = (0..(w * h) as usize)
+            out.two = (0..(w * h) as usize)
                 .map(|i| {
                     let (x, y) = (i as u32 % w, i as u32 / w);
-                    map.range(x, y)
-                        .map_or(0.0, |(lo, hi)| (hi - lo) / rays[i].1.dot(frame.forward.as_vec3()))
+                    map.range(x, y).map_or(0.0, |(lo, hi)| (hi - lo) / rays[i].1.dot(forward))
                 })
                 .collect();
-            thickness.push(row("two depth maps (far − near)".into(), None, &two, &exact, None));
         }
-        let mut r =
-            row(format!("slicemap, {slices} slices"), Some(slices), &t, &exact, Some(&slice));
-        r.cpu_ms = cpu_ms;
-        r.gpu_ms = gpu_ms;
-        thickness.push(r);
-        per_slices.push((slices, t));
+        out.sliced.push((slices, t, slice));
+        out.timings.push((cpu_ms, gpu_ms));
     }
     // The shown slice count, or the last one measured.
-    let (shown, sliced) = per_slices
+    let (shown, sliced, _) = out
+        .sliced
         .iter()
-        .find(|(n, _)| *n == c.shown_slices)
-        .or(per_slices.last())
+        .find(|(n, _, _)| *n == c.shown_slices)
+        .or(out.sliced.last())
         .cloned()
-        .ok_or(Error::InvalidConfig {
-            study: "slicemap",
-            field: "refraction.slices",
-            value: "[]".into(),
-            expected: "at least one slice count",
-        })?;
+        .expect("validated: at least one slice count");
     let dirs: Vec<Vec3> = rays.iter().map(|r| r.1).collect();
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
     let eye = frame.eye.as_vec3();
-    let forward = frame.forward.as_vec3();
     let plane = (centre - eye).dot(forward) + 1.5 * radius;
     let tan = (camera.fov_y_deg.to_radians() * 0.5).tan();
     let width_on_plane = 2.0 * plane * tan * w as f32 / h as f32;
@@ -384,44 +380,113 @@ pub fn run(
         radius,
         disc: disc(32),
     };
-    let max_l = exact.iter().copied().fold(0.0, f32::max);
-    let mut images = vec![
-        ("L exact".to_string(), grey(&exact, max_l, w, h)),
-        ("L two depths".to_string(), grey(&two, max_l, w, h)),
-        (format!("L slicemap {shown}"), grey(&sliced, max_l, w, h)),
-        ("L error x10".to_string(), {
-            let err: Vec<f32> = exact.iter().zip(&sliced).map(|(a, b)| (a - b).abs()).collect();
-            grey(&err, max_l * 0.1, w, h)
-        }),
-    ];
-    let mut effects = Vec::new();
+    let exact = &out.exact;
+    if first {
+        let max_l = exact.iter().copied().fold(0.0, f32::max);
+        let err: Vec<f32> = exact.iter().zip(&sliced).map(|(a, b)| (a - b).abs()).collect();
+        out.images = vec![
+            ("L exact".to_string(), grey(exact, max_l, w, h)),
+            ("L two depths".to_string(), grey(&out.two, max_l, w, h)),
+            (format!("L slicemap {shown}"), grey(&sliced, max_l, w, h)),
+            ("L error x10".to_string(), grey(&err, max_l * 0.1, w, h)),
+        ];
+    }
     for (name, short, effect) in [
         ("refraction", "refract", Effect::Refraction),
         ("attenuation", "absorb", Effect::Attenuation),
         ("frosted glass", "frost", Effect::Frosted),
     ] {
-        let reference = fx.image(effect, &gb, &dirs, &exact);
+        let reference = fx.image(effect, &gb, &dirs, exact);
         let slicemap = fx.image(effect, &gb, &dirs, &sliced);
-        let depth = fx.image(effect, &gb, &dirs, &two);
-        effects.push(EffectRow {
-            effect: name.into(),
-            method: format!("slicemap, {shown} slices"),
-            image: compare(&slicemap, &reference)?,
-        });
-        effects.push(EffectRow {
-            effect: name.into(),
-            method: "two depth maps".into(),
-            image: compare(&depth, &reference)?,
-        });
-        images.push((format!("{short} exact"), reference.clone()));
-        images.push((format!("{short} slicemap"), slicemap.clone()));
-        images.push((format!("{short} two depths"), depth));
-        images.push((format!("{short} err x10"), error_heatmap(&slicemap, &reference, 0.1)?));
+        let depth = fx.image(effect, &gb, &dirs, &out.two);
+        let method = format!("slicemap, {shown} slices");
+        out.effects.push((name.into(), method, compare(&slicemap, &reference)?));
+        out.effects.push((name.into(), "two depth maps".into(), compare(&depth, &reference)?));
+        if first {
+            let heat = error_heatmap(&slicemap, &reference, 0.1)?;
+            out.images.push((format!("{short} exact"), reference));
+            out.images.push((format!("{short} slicemap"), slicemap));
+            out.images.push((format!("{short} two depths"), depth));
+            out.images.push((format!("{short} err x10"), heat));
+        }
     }
+    Ok(out)
+}
+
+/// A perspective map through `camera`, its depth range the scene's bounding sphere.
+fn camera_through(
+    camera: &voxlod_scene::Camera,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+) -> Result<SliceCamera, Error> {
+    let (lo, hi) = scene.bounds()?;
+    let c = ((lo + hi) * 0.5).as_dvec3();
+    let r = ((hi - lo).length() * 0.5) as f64;
+    let forward = (camera.target - camera.eye).as_dvec3().normalize_or_zero();
+    let depth = (c - camera.eye.as_dvec3()).dot(forward);
+    let far = (depth + r) * 1.001;
+    let near = (depth - r).max(far * 1e-3);
+    Ok(SliceCamera::from_camera(camera, width, height, near, far))
+}
+
+/// Runs the refraction part (module docs): every view's pixels pooled in the error rows, the
+/// effects' metrics averaged over the views, times and images from the first view.
+pub fn run(
+    config: &RefractionConfig,
+    gpu: Option<(&SlicemapRenderer, &SlicemapQueries)>,
+    progress: &dyn Fn(&str),
+) -> Result<RefractionResult, Error> {
+    let c = config;
+    progress(&format!("slicemap refraction: {}", c.scene));
+    let scene: Scene = crate::scenes::load(&c.scene)?;
+    let g = scene.geometry();
+    let (lo, hi) = scene.bounds()?;
+    let small = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 16)?;
+    let solid = vox::Options { mode: Mode::Solid, triangle_lists: false, ..Default::default() };
+    let boundary_edges = vox::voxelize(&g, &small, &solid)?.boundary_edges.unwrap_or(0);
+    let bvh = Bvh::new(&g)?;
+    let cameras =
+        crate::views::orbit_views(scene.default_camera()?, (lo + hi) * 0.5, c.views as usize);
+    let mut views = Vec::new();
+    for (k, camera) in cameras.iter().enumerate() {
+        progress(&format!("slicemap refraction: view {}", k + 1));
+        views.push(view(c, &scene, &g, &bvh, camera, k == 0, gpu, progress)?);
+    }
+    let exact: Vec<f32> = views.iter().flat_map(|v| v.exact.iter().copied()).collect();
+    let pixels = exact.iter().filter(|&&l| l > 0.0).count();
+    if pixels == 0 {
+        return Err(Error::NothingToMeasure {
+            scene: c.scene.clone(),
+            why: "no pixel's ray passes through the object".into(),
+        });
+    }
+    let mean_thickness = exact.iter().map(|&l| l as f64).sum::<f64>() / pixels as f64;
+    let two: Vec<f32> = views.iter().flat_map(|v| v.two.iter().copied()).collect();
+    let mut thickness = vec![row("two depth maps (far − near)".into(), None, &two, &exact, None)];
+    for (i, &slices) in c.slices.iter().enumerate() {
+        let t: Vec<f32> = views.iter().flat_map(|v| v.sliced[i].1.iter().copied()).collect();
+        let s: Vec<f32> = views.iter().flat_map(|v| v.sliced[i].2.iter().copied()).collect();
+        let mut r = row(format!("slicemap, {slices} slices"), Some(slices), &t, &exact, Some(&s));
+        (r.cpu_ms, r.gpu_ms) = views[0].timings[i];
+        thickness.push(r);
+    }
+    let n = views.len() as f64;
+    let effects = (0..views[0].effects.len())
+        .map(|i| {
+            let (effect, method, _) = views[0].effects[i].clone();
+            let mse = views.iter().map(|v| v.effects[i].2.mse).sum::<f64>() / n;
+            let ssim = views.iter().map(|v| v.effects[i].2.ssim).sum::<f64>() / n;
+            let psnr = if mse > 0.0 { 10.0 * (1.0 / mse).log10() } else { f64::INFINITY };
+            EffectRow { effect, method, image: ImageMetrics { mse, psnr, ssim } }
+        })
+        .collect();
+    let images = std::mem::take(&mut views[0].images);
     Ok(RefractionResult {
         scene: c.scene.clone(),
         boundary_edges,
         pixels,
+        views: cameras.len() as u32,
         mean_thickness,
         thickness,
         effects,
