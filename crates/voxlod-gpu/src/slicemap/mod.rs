@@ -251,10 +251,12 @@ impl<'a> SlicemapRenderer<'a> {
         let mut map = Slicemap::empty(*camera, *options);
         let columns = width as u64 * height as u64;
         let bit_bytes = map.bits.len() as u64 * 4;
-        let range_bytes = columns * 8;
+        let local = options.slicing == Slicing::Local;
+        // Uniform slicing reads no ranges: one placeholder entry.
+        let range_entries = if local { columns } else { 1 };
+        let range_bytes = range_entries * 8;
         ctx.check_storage("the slicemap bits", bit_bytes)?;
         ctx.check_storage("the slicemap column ranges", range_bytes)?;
-        let local = options.slicing == Slicing::Local;
         let mode = camera.is_perspective() as u32
             | (local as u32) << 1
             | ((options.faces.layers() == 2) as u32) << 2;
@@ -271,7 +273,7 @@ impl<'a> SlicemapRenderer<'a> {
             ..Default::default()
         };
         let bits = ctx.storage_zeroed("slicemap bits", bit_bytes)?;
-        let init: Vec<[u32; 2]> = vec![[f32::INFINITY.to_bits(), 0]; columns as usize];
+        let init: Vec<[u32; 2]> = vec![[f32::INFINITY.to_bits(), 0]; range_entries as usize];
         let ranges = ctx.storage_init("slicemap ranges", bytemuck::cast_slice(&init))?;
         let target = ctx.guarded("allocating the slicemap render target", || {
             ctx.device().create_texture(&wgpu::TextureDescriptor {
