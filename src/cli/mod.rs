@@ -301,8 +301,11 @@ pub struct VolumeArgs {
 /// `voxlod slicemap`.
 #[derive(Debug, Args)]
 pub struct SlicemapArgs {
-    /// Scene: an .obj/.gltf/.glb file or builtin:NAME[?KEY=VALUE&...] (`voxlod scenes`).
-    pub scene: String,
+    /// Scene for every part: an .obj/.gltf/.glb file or builtin:NAME[?KEY=VALUE&...]
+    /// (`voxlod scenes`). Without it, the preset's scenes: holes on the bunny and a forest
+    /// (with `--full`, also the engine), shadows on the forest's leaves, refraction through the
+    /// closed bunny.
+    pub scene: Option<String>,
     /// Paper-scale settings: 512² maps, up to 512 slices, larger images, three timed runs.
     #[arg(long)]
     pub full: bool,
