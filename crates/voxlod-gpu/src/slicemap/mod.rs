@@ -31,7 +31,10 @@
 //! # Requirements and limits
 //! Storage buffers written from the fragment stage and read from the vertex stage
 //! (`DownlevelFlags::FRAGMENT_WRITABLE_STORAGE`, `VERTEX_STORAGE`; lavapipe has both), else
-//! [`Error::Unsupported`]. The render target is `P × P` with `P` the power of two at least the
+//! [`Error::Unsupported`], and four storage buffers per shader stage (the parameters, the
+//! triangles, the bits, the column ranges; `max_storage_buffers_per_shader_stage`, else
+//! [`Error::TooLarge`]). The parameters are a read-only storage buffer rather than a uniform,
+//! as in every voxlod-gpu kernel. The render target is `P × P` with `P` the power of two at least the
 //! map's larger side plus 4 guard pixels (an `R8Unorm` target that is never written: WebGPU
 //! needs an attachment); `P` over `max_texture_dimension_2d` is [`Error::TooLarge`]. The bits
 //! (`layers × width × height × ⌈slices/32⌉` words) must fit one storage binding
@@ -54,7 +57,7 @@ pub const WGSL: &str = include_str!("slicemap.wgsl");
 /// ([`cpu::camera::GUARD_PIXELS`]) fits in it, so no vertex leaves the viewport.
 pub const GUARD: u32 = 2;
 
-/// The pipeline's uniform parameters (mirrors WGSL `Params`).
+/// The pipeline's parameters, bound as a read-only storage buffer (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuSliceParams {
@@ -133,20 +136,20 @@ impl<'a> SlicemapRenderer<'a> {
             }
         }
         let have = ctx.limits().max_storage_buffers_per_shader_stage;
-        if have < 3 {
+        if have < 4 {
             return Err(Error::TooLarge {
                 what: "storage buffers per shader stage of the slicemap pipeline \
                        (device limit max_storage_buffers_per_shader_stage)",
-                requested: 3,
+                requested: 4,
                 limit: have as u64,
             });
         }
-        use wgpu::BufferBindingType::{Storage, Uniform};
+        use wgpu::BufferBindingType::Storage;
         // Writable storage only in the fragment stage (vertex-stage writes are a native
         // feature).
         let (both, fragment) = (wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::ShaderStages::FRAGMENT);
         let entries = [
-            layout_entry(0, both, Uniform),
+            layout_entry(0, both, Storage { read_only: true }),
             layout_entry(1, both, Storage { read_only: true }),
             layout_entry(2, fragment, Storage { read_only: false }),
             layout_entry(3, fragment, Storage { read_only: false }),
@@ -304,7 +307,7 @@ impl<'a> SlicemapRenderer<'a> {
         let passes: &[u32] = if local { &[0, 1] } else { &[1] };
         for &pass_kind in passes {
             let params = GpuSliceParams { pass_kind, ..base };
-            let uniform = ctx.uniform("slicemap params", bytemuck::bytes_of(&params))?;
+            let params = ctx.uniform("slicemap params", bytemuck::bytes_of(&params))?;
             let mut groups = Vec::new();
             for (tris, count) in &batches {
                 let bind = ctx.guarded("binding slicemap buffers", || {
@@ -312,7 +315,7 @@ impl<'a> SlicemapRenderer<'a> {
                         label: Some("slicemap"),
                         layout: &self.layout,
                         entries: &[
-                            entry(0, &uniform),
+                            entry(0, &params),
                             entry(1, tris),
                             entry(2, &bits),
                             entry(3, &ranges),
@@ -348,7 +351,7 @@ impl<'a> SlicemapRenderer<'a> {
                     }
                 }
             }
-            keep.push((uniform, groups));
+            keep.push((params, groups));
         }
         ctx.submit("rasterizing a slicemap", encoder)?;
         map.bits = bytemuck::cast_slice(&ctx.read(&bits, bit_bytes)?).to_vec();

@@ -13,7 +13,7 @@ use crate::{Context, Error, Result};
 /// The WGSL source of the query kernels.
 pub const WGSL: &str = include_str!("query.wgsl");
 
-/// The kernels' uniform parameters (mirrors WGSL `QueryParams`).
+/// The kernels' parameters, bound as a read-only storage buffer (mirrors WGSL `QueryParams`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuQueryParams {
@@ -56,7 +56,7 @@ pub struct SlicemapQueries<'a> {
 impl<'a> SlicemapQueries<'a> {
     /// Compiles the kernels.
     pub fn new(ctx: &'a Context) -> Result<Self> {
-        use wgpu::BufferBindingType::{Storage, Uniform};
+        use wgpu::BufferBindingType::Storage;
         let ro = Storage { read_only: true };
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
@@ -65,7 +65,7 @@ impl<'a> SlicemapQueries<'a> {
             count: None,
         };
         let entries = [
-            entry(0, Uniform),
+            entry(0, ro),
             entry(1, ro),
             entry(2, ro),
             entry(3, ro),
@@ -120,7 +120,7 @@ impl<'a> SlicemapQueries<'a> {
     ) -> Result<Vec<u32>> {
         let ctx = self.ctx;
         let params = Self::params(map, queries.len() as u32);
-        let uniform = ctx.uniform("slicemap query params", bytemuck::bytes_of(&params))?;
+        let params_buffer = ctx.uniform("slicemap query params", bytemuck::bytes_of(&params))?;
         let bits = ctx.storage_init("slicemap bits", bytemuck::cast_slice(&map.bits))?;
         let ranges: Vec<[f32; 2]> = map.ranges.clone().unwrap_or_else(|| vec![[0.0; 2]]);
         let ranges = ctx.storage_init("slicemap ranges", bytemuck::cast_slice(&ranges))?;
@@ -135,7 +135,7 @@ impl<'a> SlicemapQueries<'a> {
                 label: Some("slicemap query"),
                 layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: bits.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 2, resource: ranges.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 3, resource: query.as_entire_binding() },

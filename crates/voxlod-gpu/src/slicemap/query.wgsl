@@ -21,7 +21,7 @@ struct Query {
     d: f32,
 }
 
-@group(0) @binding(0) var<uniform> params: QueryParams;
+@group(0) @binding(0) var<storage, read> params: QueryParams;
 @group(0) @binding(1) var<storage, read> bits: array<u32>;
 @group(0) @binding(2) var<storage, read> ranges: array<vec2<f32>>;
 @group(0) @binding(3) var<storage, read> queries: array<Query>;

@@ -42,7 +42,7 @@ struct Params {
     pad2: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> tris: array<SliceTri>;
 @group(0) @binding(2) var<storage, read_write> bits: array<atomic<u32>>;
 // Per column: [lo, hi] of d = z − near as f32 bits (d ≥ 0, so integer order is float order).

@@ -67,7 +67,7 @@ use voxlod_format::records::AverageRecord;
 use voxlod_gpu::precompute::{LineCase, Outputs, Precomputer};
 use voxlod_scene::{AlphaMode, Geometry, Material, Mesh, Scene};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 /// See the module docs.
 const LINE_BOUND: f64 = 1e-3;
@@ -243,10 +243,10 @@ fn oracle(c: &Case, scene: &Scene) -> Answer {
 }
 
 /// The backend's answer for `c` sampled with `seed`.
-fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
+fn run(backend: &Executor, c: &Case, seed: u32) -> Result<Answer, String> {
     let opts = PrecomputeOptions { seed, ..c.opts };
     match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             let ctx =
                 SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
             let grid = precompute(&ctx, &opts, averages::fit).map_err(|e| e.to_string())?;
@@ -271,7 +271,7 @@ fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
             }
             Ok(out)
         }
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             let k = Precomputer::new(ctx).map_err(|e| e.to_string())?;
             let r = k
                 .run(&c.scene, &c.geometry, &c.vox, &opts, Outputs { lines: true })
@@ -632,7 +632,7 @@ thread_local! {
     static CACHE: RefCell<Cache> = RefCell::default();
 }
 
-fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
+fn rows(backend: &Executor, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
     let key = (backend.name(), set);
     if let Some(r) = CACHE.with(|c| c.borrow().get(&key).cloned()) {
         return Ok(r);
@@ -644,10 +644,10 @@ fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
         let o = oracle(c, &c.scene);
         let a = run(backend, c, c.opts.seed)?;
         // The CPU sampler reports no triangle: only its cases are compared.
-        let tri = matches!(backend, Backend::Gpu(_));
+        let tri = matches!(backend, Executor::Gpu(_));
         let mut row = compare(&c.name, &a, &o, tri);
-        if let Backend::Gpu(_) = backend {
-            let cpu = run(&Backend::Cpu, c, c.opts.seed)?;
+        if let Executor::Gpu(_) = backend {
+            let cpu = run(&Executor::Cpu, c, c.opts.seed)?;
             let direct = compare("gpu-vs-cpu", &a, &cpu, false);
             let (same, all) = a.line_bits.unwrap_or_default();
             row.note = format!(
@@ -755,19 +755,19 @@ fn voxels_measure(rows: &[Row]) -> Measure {
     Measure::combine(&measures)
 }
 
-pub fn lines_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn lines_scenes(backend: &Executor) -> Result<Measure, String> {
     Ok(lines_measure(&rows(backend, "scenes")?))
 }
 
-pub fn voxels_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn voxels_scenes(backend: &Executor) -> Result<Measure, String> {
     Ok(voxels_measure(&rows(backend, "scenes")?))
 }
 
-pub fn lines_property(backend: &Backend) -> Result<Measure, String> {
+pub fn lines_property(backend: &Executor) -> Result<Measure, String> {
     Ok(lines_measure(&rows(backend, "property")?))
 }
 
-pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
+pub fn voxels_property(backend: &Executor) -> Result<Measure, String> {
     Ok(voxels_measure(&rows(backend, "property")?))
 }
 
@@ -775,7 +775,7 @@ pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
 /// as one dispatch (GPU); the CPU driver on one thread gives the same bits as on the pool
 /// (CPU). Bad input: `rays = 0` gets the CPU's error word for word; a texture edge over
 /// [`voxlod_gpu::material::MAX_TEXTURE_EDGE`] gets an error with the numbers on the GPU. Exact.
-pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
+pub fn dispatches(backend: &Executor) -> Result<Measure, String> {
     // The bunny at 16³ with 64 lines: ~800 voxels, 22 dispatches of 37.
     let bunny = scene_cases().swap_remove(0).scene;
     let (lo, hi) = bunny.bounds().map_err(|e| e.to_string())?;
@@ -787,7 +787,7 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
     let ctx = SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
     let cpu_err = precompute(&ctx, &zero, averages::fit).map(|_| ()).unwrap_err().to_string();
     match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             let pool = precompute(&ctx, &c.opts, averages::fit).map_err(|e| e.to_string())?;
             let one = rayon::ThreadPoolBuilder::new()
                 .num_threads(1)
@@ -798,7 +798,7 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
             bad += (pool.records.values() != one.records.values()) as usize;
             notes.push(format!("{} records, 1 thread vs pool", pool.records.len()));
         }
-        Backend::Gpu(gpu) => {
+        Executor::Gpu(gpu) => {
             let k = Precomputer::new(gpu).map_err(|e| e.to_string())?;
             let all = Outputs { lines: true };
             let base =

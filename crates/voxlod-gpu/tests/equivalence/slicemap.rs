@@ -29,7 +29,7 @@ use voxlod_gpu::slicemap::SlicemapRenderer;
 use voxlod_gpu::slicemap::query::SlicemapQueries;
 use voxlod_scene::{Camera, Geometry};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 /// Normalized-depth distance to a slice boundary within which a bit may differ.
 const BOUNDARY: f32 = 1e-5;
@@ -38,10 +38,10 @@ const MAX_FRACTION: f64 = 1e-3;
 
 type Kernels<'a> = Option<(SlicemapRenderer<'a>, SlicemapQueries<'a>)>;
 
-fn kernels<'a>(backend: &Backend<'a>) -> Result<Kernels<'a>, String> {
+fn kernels<'a>(backend: &Executor<'a>) -> Result<Kernels<'a>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => {
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => {
             let r = SlicemapRenderer::new(ctx).map_err(|e| e.to_string())?;
             let q = SlicemapQueries::new(ctx).map_err(|e| e.to_string())?;
             Ok(Some((r, q)))
@@ -260,7 +260,7 @@ fn opts(slices: u32, slicing: Slicing, coverage: Coverage, faces: Faces) -> Opti
 
 /// The render pipeline on fixed scenes: the bunny in perspective, tie-laden triangles in an
 /// aligned map, a soup with clipping, in both coverage rules and both slicings.
-pub fn scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let bunny = bunny();
     let bcam = bunny_camera(&bunny, 96, 80);
@@ -293,7 +293,7 @@ pub fn scenes(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Random soups, cameras and options (a fixed-seed proptest run).
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let config = Config { cases: 12, failure_persistence: None, ..Config::default() };
     let rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[17; 32]);
@@ -341,7 +341,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
 
 /// The query kernels on the backend's own maps: inner voxels exact, occluders exact except at
 /// boundary points.
-pub fn queries(backend: &Backend) -> Result<Measure, String> {
+pub fn queries(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let bunny = bunny();
     let cam = bunny_camera(&bunny, 64, 56);
@@ -400,7 +400,7 @@ pub fn queries(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Controls that must fail: the comparison catches a wrong coverage rule and a shifted slice.
-pub fn control(backend: &Backend) -> Result<Measure, String> {
+pub fn control(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let bunny = bunny();
     let cam = bunny_camera(&bunny, 48, 40);

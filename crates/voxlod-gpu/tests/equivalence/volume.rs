@@ -47,7 +47,7 @@ use voxlod_scene::particles::{ColorMode, DisplacedSphere, DisplacementMap, FLAG_
 use voxlod_scene::procedural::Rng;
 use voxlod_scene::{Camera, Geometry, Image};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 use crate::images::{ImageBound, compare as compare_srgb};
 
 /// [`compare_srgb`], with the largest linear (premultiplied RGBA) difference in the note.
@@ -120,10 +120,10 @@ fn floor() -> Geometry {
     }
 }
 
-fn kernels<'a>(backend: &Backend<'a>) -> Result<Option<VolumeKernels<'a>>, String> {
+fn kernels<'a>(backend: &Executor<'a>) -> Result<Option<VolumeKernels<'a>>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => VolumeKernels::new(ctx).map(Some).map_err(|e| e.to_string()),
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => VolumeKernels::new(ctx).map(Some).map_err(|e| e.to_string()),
     }
 }
 
@@ -159,7 +159,7 @@ fn exact_bins(name: &str, got: &[Bin], want: &[Bin]) -> Measure {
     Measure { max_error: if pass { 0.0 } else { 1.0 }, bound: 0.0, pass, note }
 }
 
-pub fn binning_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn binning_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let mut out = Vec::new();
     for (n, seed, light, kk, m, _) in cases() {
@@ -225,7 +225,7 @@ fn filled(
     Ok((b, out))
 }
 
-pub fn fill_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn fill_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let mut out = Vec::new();
@@ -322,7 +322,7 @@ fn propagate_f64(
     out
 }
 
-pub fn propagation_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn propagation_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let mut out = Vec::new();
@@ -378,7 +378,7 @@ fn camera_outside() -> Camera {
     Camera::framing(Vec3::new(0.6, 0.4, 1.0), Vec3::ZERO, 1.6, 45.0)
 }
 
-pub fn march_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn march_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let options = MarchOptions { width: 48, height: 40, step: 1.0 };
@@ -479,7 +479,7 @@ fn reference_frame(
     frame(&None, s, map, spec, settings, camera, options, mesh)
 }
 
-pub fn frame_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn frame_scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let options = MarchOptions { width: 48, height: 40, step: 1.0 };
@@ -510,7 +510,7 @@ pub fn frame_scenes(backend: &Backend) -> Result<Measure, String> {
     Ok(Measure::combine(&out))
 }
 
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(8u64);
@@ -574,7 +574,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
 /// The extremes of the CPU's own tests: density 0 and 10⁶, particles outside the volume or
 /// larger than it, no particles, under axis and diagonal lights: bins exact, frames within the
 /// frame bound, every image finite.
-pub fn extremes(backend: &Backend) -> Result<Measure, String> {
+pub fn extremes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let one = |c: Vec3, inner: f32, amplitude: f32, density: f32| DisplacedSphere {
@@ -646,7 +646,7 @@ pub fn extremes(backend: &Backend) -> Result<Measure, String> {
 /// The checks above can fail: a frame with 20 % denser particles is beyond the frame bound,
 /// a bin list with one particle dropped is not exact, and a frame built without the mesh's
 /// shadow (light from below the floor) is beyond the frame bound.
-pub fn control(backend: &Backend) -> Result<Measure, String> {
+pub fn control(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let map = map();
     let (n, seed, light, kk, m, density) = cases()[0];
@@ -710,7 +710,7 @@ pub fn control(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Bad input gets the CPU path's errors through the GPU entry points.
-pub fn errors(backend: &Backend) -> Result<Measure, String> {
+pub fn errors(backend: &Executor) -> Result<Measure, String> {
     let Some(k) = kernels(backend)? else {
         return Ok(Measure { max_error: 0.0, bound: 0.0, pass: true, note: "GPU only".into() });
     };
