@@ -135,7 +135,10 @@ impl<'a> SlicemapQueries<'a> {
                 label: Some("slicemap query"),
                 layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params_buffer.as_entire_binding(),
+                    },
                     wgpu::BindGroupEntry { binding: 1, resource: bits.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 2, resource: ranges.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 3, resource: query.as_entire_binding() },

@@ -207,6 +207,33 @@ fn ties() -> (Geometry, SliceCamera) {
     (g, cam)
 }
 
+/// 512 planes parallel to the image, one in the middle of each slice of a 2 × 2 orthographic
+/// map between depths 0 and 512: every bit of every column set.
+fn full_columns() -> (Geometry, SliceCamera) {
+    let mut g = Geometry::default();
+    for k in 0..512u32 {
+        let z = 10.0 - (k as f32 + 0.5);
+        let b = g.positions.len() as u32;
+        g.positions.extend([
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(6.0, -1.0, z),
+            Vec3::new(-1.0, 6.0, z),
+        ]);
+        g.indices.push([b, b + 1, b + 2]);
+    }
+    let cam = SliceCamera {
+        eye: DVec3::new(1.0, 1.0, 10.0),
+        forward: DVec3::NEG_Z,
+        up: DVec3::Y,
+        projection: Projection::Orthographic { half_width: 1.0, half_height: 1.0 },
+        width: 2,
+        height: 2,
+        near: 0.0,
+        far: 512.0,
+    };
+    (g, cam)
+}
+
 /// A soup of triangles of all sizes around the origin, some far larger than the view (guard
 /// band clipping) and some crossing the near plane.
 fn soup(n: u32, seed: u32) -> Geometry {
@@ -259,7 +286,8 @@ fn opts(slices: u32, slicing: Slicing, coverage: Coverage, faces: Faces) -> Opti
 }
 
 /// The render pipeline on fixed scenes: the bunny in perspective, tie-laden triangles in an
-/// aligned map, a soup with clipping, in both coverage rules and both slicings.
+/// aligned map, a soup with clipping, in both coverage rules and both slicings; columns with
+/// every bit set.
 pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     let k = kernels(backend)?;
     let bunny = bunny();
@@ -285,6 +313,13 @@ pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     for (name, g, cam, o) in &cases {
         measures.push(case(&k, name, g, cam, o)?.0);
     }
+    // Every bit of every column set: the reference's columns are full, and so must the GPU's be.
+    let (full, fcam) = full_columns();
+    let (m, got) = case(&k, "512 slices, full columns", &full, &fcam, &opts(512, U, S, All))?;
+    if got.bits.iter().any(|&w| w != u32::MAX) {
+        return Err("512 planes: a column is not full".into());
+    }
+    measures.push(m);
     // The same soup in draws of 7 triangles (the batching path).
     let small = k.map(|(r, q)| (r.with_batch(7), q));
     let o = opts(64, Slicing::Local, Coverage::Conservative, Faces::Split);
