@@ -1,5 +1,6 @@
 //! `voxlod slicemap` end to end on a tiny setting: every part's rows in the JSON, the report
-//! and `slicemap.json` on disk, and one-line errors for bad arguments.
+//! and `slicemap.json` on disk, the preset's scenes without a scene argument, and one-line
+//! errors for bad arguments.
 
 use std::process::Command;
 
@@ -70,6 +71,25 @@ fn slicemap_measures_holes_shadows_and_thickness() {
     for f in ["report.md", "report.json", "slicemap.json"] {
         assert!(dir.join(f).is_file(), "{f}");
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // Without a scene, each part runs on the preset's scene (the refraction: the bunny).
+    let out = voxlod(&[
+        "slicemap",
+        "--parts",
+        "refraction",
+        "--slices",
+        "8",
+        "--image",
+        "24",
+        "-o",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v = crate::json_result(&out.stdout, "slicemap");
+    assert_eq!(v["refraction"]["scene"], "builtin:bunny", "{v}");
+    assert!(v["holes"].is_null() && v["shadows"].is_null(), "{v}");
     std::fs::remove_dir_all(&dir).unwrap();
 
     for bad in [
