@@ -41,6 +41,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Cone(a) => commands::cone(&ui, a),
         cli::Command::Info(a) => commands::info(a),
         cli::Command::Volume(a) => commands::volume(&ui, a),
+        cli::Command::Slicemap(a) => commands::slicemap(&ui, a),
         cli::Command::Scenes => commands::scenes(),
     }
 }

@@ -45,6 +45,11 @@ pub enum Command {
     /// with metavoxels, and measure its trade: attenuation models against the exact reference,
     /// time and memory per metavoxel size.
     Volume(VolumeArgs),
+    /// Slicemaps (bitmask voxelization by rasterization, Eisemann and Décoret 2006) of a scene:
+    /// holes against the exact voxelizers, transmittance shadow maps against ray-traced
+    /// transmittance, the traversed volume for refraction against ray-cast intervals; images
+    /// and error tables.
+    Slicemap(SlicemapArgs),
     /// List the builtin scenes and their parameters.
     Scenes,
 }
@@ -287,6 +292,57 @@ pub struct VolumeArgs {
     pub backend: BackendArg,
     /// Output directory.
     #[arg(short, long, default_value = "out/volume")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod slicemap`.
+#[derive(Debug, Args)]
+pub struct SlicemapArgs {
+    /// Scene for every part: an .obj/.gltf/.glb file or builtin:NAME[?KEY=VALUE&...]
+    /// (`voxlod scenes`). Without it, the preset's scenes: holes on the bunny and a forest
+    /// (with `--full`, also the engine), shadows on the forest's leaves, refraction through the
+    /// closed bunny.
+    pub scene: Option<String>,
+    /// Paper-scale settings: 512² maps, up to 512 slices, larger images, three timed runs.
+    #[arg(long)]
+    pub full: bool,
+    /// Parts to run, comma-separated.
+    #[arg(long, default_value = "holes,shadows,refraction", value_delimiter = ',',
+          value_parser = clap::builder::PossibleValuesParser::new(["holes", "shadows", "refraction"]))]
+    pub parts: Vec<String>,
+    /// Slice counts (1..=512) of the perspective maps and of the refraction's front/back maps,
+    /// comma-separated (default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=512))]
+    pub slices: Vec<u32>,
+    /// Width in pixels of the shadow and refraction images (1..=4096; default: the preset's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub image: Option<u32>,
+    /// Voxels along the longest side of the grid the aligned maps are compared in (1..=512;
+    /// default: the preset's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=512))]
+    pub res: Option<u32>,
+    /// Columns per side of the perspective maps and of the light's maps (1..=4096; default:
+    /// the preset's). With it, the shadow maps are measured at this size for every slice
+    /// count of `--slices` (or 32, 96, 512).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub map_size: Option<u32>,
+    /// Substring of the names of semi-transparent materials for the shadow maps (when none
+    /// matches, every triangle is a semi-transparent layer).
+    #[arg(long, default_value = "leaves")]
+    pub transmissive: String,
+    /// Attenuation σ of one semi-transparent layer, in [0, 1].
+    #[arg(long, default_value_t = 0.3, value_parser = parse::f32_in(0.0, 1.0, false))]
+    pub sigma: f32,
+    /// Where the slicemaps are also built, for their time (gpu: voxlod-gpu's render pipeline;
+    /// every measured number comes from the CPU reference, which the equivalence suite shows
+    /// equal).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/slicemap")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]

@@ -6,6 +6,7 @@ mod cone;
 mod info;
 mod render;
 mod report;
+mod slicemap;
 mod volume;
 mod voxelize;
 
@@ -20,6 +21,7 @@ pub use cone::cone;
 pub use info::info;
 pub use render::render;
 pub use report::report;
+pub use slicemap::slicemap;
 pub use volume::volume;
 pub use voxelize::voxelize;
 

@@ -3,6 +3,7 @@
 mod cli;
 mod cone;
 mod scene_files;
+mod slicemap;
 mod volume;
 
 /// The `result` of a `--json` output, after checking the envelope every command shares

@@ -47,6 +47,7 @@
 //! | [`baseline`] | ground truth and its noise, voxelization, the voxel baseline (opaque cubes of average colour) per resolution |
 //! | [`filtered`] | the filtered-appearance representations of Brito, Poulin and Teichrieb (2023): Averages, \[VJK21\], virtual mesh + opacity subgrid, Adaptive |
 //! | [`volume`] | procedural participating media with metavoxels (McNabb 2015, GPU Pro 6): attenuation models, metavoxel sizes, memory |
+//! | [`slicemap`] | slicemaps (Eisemann and Décoret 2006): holes against the exact voxelizers, transmittance shadow maps against ray-traced transmittance, the traversed volume for refraction against ray-cast intervals |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
@@ -86,6 +87,8 @@
 //!   for global illumination", Journal of Real-Time Image Processing 17(5), §4.5, and Crassin,
 //!   Neyret, Sainz, Green, Eisemann 2011, "Interactive Indirect Illumination Using Voxel Cone
 //!   Tracing", Pacific Graphics: [`cone`].
+//! - Eisemann, Décoret 2006, "Fast Scene Voxelization and Applications", ACM Symposium on
+//!   Interactive 3D Graphics and Games (I3D), §2, §3.1 and §3.3: [`slicemap`].
 //! - Wang, Bovik, Sheikh, Simoncelli 2004, "Image Quality Assessment: From Error Visibility to
 //!   Structural Similarity", IEEE Transactions on Image Processing 13(4): the SSIM every study
 //!   reports.
@@ -102,6 +105,7 @@ mod ground_truths;
 pub mod machine;
 pub mod report;
 pub mod scenes;
+pub mod slicemap;
 pub mod spread;
 pub mod views;
 pub mod volume;

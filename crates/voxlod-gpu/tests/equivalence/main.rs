@@ -2,9 +2,9 @@
 //!
 //! Modelled on wgpu's own test harness: kernel bodies ([`voxelize`], [`raycast`], [`random`],
 //! [`materials`], [`ground_truth`], [`filtered`], [`voxels`], [`octree`], [`precompute`],
-//! [`cone`], [`volume`]), each run on the CPU reference and then on every adapter wgpu finds,
-//! against the same oracle and the same stated tolerance; known driver problems are data
-//! ([`KNOWN_ISSUES`]: skip, or expect failure, with the reason), never `#[ignore]`.
+//! [`cone`], [`volume`], [`slicemap`]), each run on the CPU reference and then on every adapter
+//! wgpu finds, against the same oracle and the same stated tolerance; known driver problems are
+//! data ([`KNOWN_ISSUES`]: skip, or expect failure, with the reason), never `#[ignore]`.
 //!
 //! Each (kernel body × executor) is its own test, named `<kernel body> :: <executor>` (e.g.
 //! `octree build topology (scenes) :: llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`), so the
@@ -27,6 +27,7 @@ mod octree;
 mod precompute;
 mod random;
 mod raycast;
+mod slicemap;
 mod volume;
 mod voxelize;
 mod voxels;
@@ -88,6 +89,10 @@ const KERNELS: &[Kernel] = &[
     Kernel { name: "volume frame (extremes)", body: volume::extremes },
     Kernel { name: "volume control (must fail)", body: volume::control },
     Kernel { name: "volume errors", body: volume::errors },
+    Kernel { name: "slicemap (scenes)", body: slicemap::scenes },
+    Kernel { name: "slicemap (proptest)", body: slicemap::property },
+    Kernel { name: "slicemap queries (scenes)", body: slicemap::queries },
+    Kernel { name: "slicemap control (must fail)", body: slicemap::control },
 ];
 
 fn main() -> ExitCode {
