@@ -10,12 +10,12 @@
 //! | [`cone`] | one cone's march: **aperture (full angle)**, footprint level, step, opacity correction, AO falloff — defined there once |
 //! | [`tracer`] | [`ConeTracer`]: AO, diffuse and specular cones from a shading point; self-occlusion offsets |
 //! | [`primary`] | [`PrimaryRenderer`]: primary visibility, one pixel-wide cone per pixel, level of detail by distance, shaded samples |
+//! | [`differential`] | [`DifferentialRenderer`]: Heitz and Neyret's (2012) differential cone tracing of a `MicrosurfacePayload` octree with coverage masks, view- and light-dependent colour, depth of field |
 //!
 //! Layering: depends on `voxlod-octree` and `voxlod-format` only (no BVH, no GPU API). Shadows
 //! at injection are either marched through the geometry octree itself or given per leaf by the
 //! caller ([`Shadows`]). The wgpu kernel of the AO / diffuse / specular cones is voxlod-gpu's
-//! `cone` module (checked against [`ConeTracer`] by its equivalence suite). Not here yet:
-//! Heitz–Neyret differential cone tracing.
+//! `cone` module (checked against [`ConeTracer`] by its equivalence suite).
 //!
 //! ```
 //! use glam::{DVec3, UVec3, Vec3};
@@ -53,6 +53,7 @@
 #![deny(missing_docs)]
 
 pub mod cone;
+pub mod differential;
 mod error;
 pub mod inject;
 pub mod medium;
@@ -60,6 +61,10 @@ pub mod primary;
 pub mod tracer;
 
 pub use cone::{Cone, ConeResult, March, SampleInfo, falloff, trace, trace_shaded};
+pub use differential::{
+    Compositing, DepthOfField, DifferentialImage, DifferentialOptions, DifferentialPixel,
+    DifferentialRenderer, SurfaceShadeInput,
+};
 pub use error::{Error, Result};
 pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};
 pub use medium::{ConeMedium, RadianceLeaf, RadiancePayload};
