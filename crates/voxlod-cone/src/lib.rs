@@ -63,7 +63,7 @@ pub mod tracer;
 pub use cone::{Cone, ConeResult, March, SampleInfo, falloff, trace, trace_shaded};
 pub use differential::{
     Compositing, DepthOfField, DifferentialImage, DifferentialOptions, DifferentialPixel,
-    DifferentialRenderer, SurfaceShadeInput,
+    DifferentialRenderer, FrameConstants, SurfaceShadeInput,
 };
 pub use error::{Error, Result};
 pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};

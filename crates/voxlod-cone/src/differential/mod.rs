@@ -182,6 +182,29 @@ pub struct DifferentialImage {
     pub shadow_elements: u64,
 }
 
+/// The set-up a [`DifferentialRenderer`] derives from its camera and options, exposed for GPU
+/// mirrors of it (so that both start from the same numbers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameConstants {
+    /// Unit view direction.
+    pub forward: Vec3,
+    /// Camera right, scaled by `tan(fov/2)·aspect` (a pixel's direction is
+    /// `normalize(forward + right·ndc_x + up·ndc_y)`).
+    pub right: Vec3,
+    /// Camera up, scaled by `tan(fov/2)`.
+    pub up: Vec3,
+    /// Footprint per unit distance, `b·2·tan(fov/2)/height`.
+    pub spread: f32,
+    /// Circle-of-confusion factor `2R/F` (0 without a lens).
+    pub coc: f32,
+    /// Focus distance `F`, voxels (1 without a lens).
+    pub focus: f32,
+    /// The eye in grid coordinates.
+    pub origin: Vec3,
+    /// Longest march, voxels (`max_distance / voxel size`; may be infinite).
+    pub max_t: f32,
+}
+
 /// Differential cone tracing of a [`MicrosurfacePayload`] octree (module docs).
 #[derive(Clone, Debug)]
 pub struct DifferentialRenderer<'a> {
@@ -276,6 +299,36 @@ impl<'a> DifferentialRenderer<'a> {
         &self.options
     }
 
+    /// The octree rendered.
+    pub fn tree(&self) -> &'a Octree<MicrosurfacePayload> {
+        self.tree
+    }
+
+    /// The light.
+    pub fn light(&self) -> &Light {
+        &self.light
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &PinholeCamera {
+        &self.camera
+    }
+
+    /// The set-up a GPU mirror starts from ([`FrameConstants`]).
+    pub fn frame_constants(&self) -> FrameConstants {
+        let (r, f) = self.lens;
+        FrameConstants {
+            forward: self.forward,
+            right: self.right,
+            up: self.up,
+            spread: self.spread,
+            coc: 2.0 * r / f,
+            focus: f,
+            origin: self.tree.grid().to_grid(DVec3::from(self.camera.eye)).as_vec3(),
+            max_t: self.options.max_distance / self.voxel,
+        }
+    }
+
     /// Footprint diameter (voxels) at `t` voxels from the eye along a pixel's axis (module
     /// docs), before the one-voxel floor of the octree read.
     pub fn footprint_voxels(&self, t: f32) -> f32 {
@@ -283,8 +336,8 @@ impl<'a> DifferentialRenderer<'a> {
     }
 
     fn footprint(&self, d0: f32) -> Footprint {
-        let (r, f) = self.lens;
-        Footprint { d0, spread: self.spread, coc: 2.0 * r / f, focus: f }
+        let c = self.frame_constants();
+        Footprint { d0, spread: c.spread, coc: c.coc, focus: c.focus }
     }
 
     /// Unit direction of the ray through image point `(px, py)` (pixels from the top-left).
@@ -403,9 +456,8 @@ impl<'a> DifferentialRenderer<'a> {
         shade: &(impl Fn(&SurfaceShadeInput) -> Vec3 + ?Sized),
     ) -> DifferentialPixel {
         let dir = self.ray_dir(x as f32 + 0.5, y as f32 + 0.5);
-        let origin = self.tree.grid().to_grid(DVec3::from(self.camera.eye)).as_vec3();
+        let FrameConstants { origin, max_t, .. } = self.frame_constants();
         let frame = self.frame(dir);
-        let max_t = self.options.max_distance / self.voxel;
         let mut shadow: Option<(Vec3, f32)> = None;
         let mut shadow_elements = 0u32;
         let g = self.march(

@@ -1,7 +1,7 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
 //! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`materials`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`volume`]),
+//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`differential`], [`volume`]),
 //! each run on the CPU reference and then on every adapter wgpu finds, against the same
 //! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
 //! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
@@ -12,6 +12,7 @@
 //! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
 
 mod cone;
+mod differential;
 mod filtered;
 mod ground_truth;
 mod harness;
@@ -75,6 +76,10 @@ fn equivalence_suite() {
         suite.run("cone tracing (proptest)", backend, cone::property);
         suite.run("cone tracing (control)", backend, cone::control);
         suite.run("cone tracing (errors)", backend, cone::errors);
+        suite.run("differential cone tracing (scenes)", backend, differential::scenes);
+        suite.run("differential cone tracing (proptest)", backend, differential::property);
+        suite.run("differential cone tracing (control)", backend, differential::control);
+        suite.run("differential Smith f32 vs f64", backend, differential::smith);
         suite.run("volume binning (scenes)", backend, volume::binning_scenes);
         suite.run("volume fill (scenes)", backend, volume::fill_scenes);
         suite.run("volume propagation (scenes)", backend, volume::propagation_scenes);
