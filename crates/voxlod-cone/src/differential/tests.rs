@@ -20,7 +20,16 @@ fn sdf_tree(
     grad: impl Fn(Vec3) -> Vec3,
     leaf: impl Fn(Vec3, Vec3, Vec3) -> MicrosurfaceRecord,
 ) -> Octree<MicrosurfacePayload> {
-    let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap();
+    sdf_tree_in(GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap(), sdf, grad, leaf)
+}
+
+/// [`sdf_tree`] in another placement of the same 64³ grid (the surface in grid coordinates).
+fn sdf_tree_in(
+    grid: GridSpec,
+    sdf: impl Fn(Vec3) -> f32,
+    grad: impl Fn(Vec3) -> Vec3,
+    leaf: impl Fn(Vec3, Vec3, Vec3) -> MicrosurfaceRecord,
+) -> Octree<MicrosurfacePayload> {
     let mut voxels = Vec::new();
     for z in 0..64u32 {
         for y in 0..64u32 {
@@ -54,6 +63,10 @@ fn grey(local: Vec3, n: Vec3, _: Vec3) -> MicrosurfaceRecord {
 
 /// The box `[32, 64) × [0, 64) × [24, 56)` (its left face x = 32, its front face z = 24).
 fn box_tree() -> Octree<MicrosurfacePayload> {
+    box_tree_in(GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(64)).unwrap())
+}
+
+fn box_tree_in(grid: GridSpec) -> Octree<MicrosurfacePayload> {
     let (lo, hi) = (Vec3::new(32.0, -8.0, 24.0), Vec3::new(72.0, 72.0, 56.0));
     let sdf = move |p: Vec3| {
         let q = (lo - p).max(p - hi);
@@ -67,7 +80,7 @@ fn box_tree() -> Octree<MicrosurfacePayload> {
             sdf(p + Vec3::Z * e) - sdf(p - Vec3::Z * e),
         )
     };
-    sdf_tree(sdf, grad, grey)
+    sdf_tree_in(grid, sdf, grad, grey)
 }
 
 fn camera(eye: Vec3, target: Vec3, fov: f32, w: u32, h: u32) -> PinholeCamera {
@@ -233,6 +246,44 @@ fn grazing_views_see_the_colour_of_the_tops() {
     assert!((grazing.x - 0.67).abs() < 0.02, "{grazing}");
     assert!((above.x - 0.5).abs() < 0.02, "{above}");
     assert!(grazing.x > above.x + 0.1 && grazing.y < above.y - 0.1, "{grazing} vs {above}");
+}
+
+/// Tiny and huge scenes, far from the origin: the march runs in grid coordinates, so the image
+/// of the same scene placed at another scale and offset is the same up to rounding (shadows,
+/// a directional light and depth of field included).
+#[test]
+fn the_image_does_not_depend_on_the_scene_scale() {
+    let render = |origin: DVec3, voxel: f64| {
+        let grid = GridSpec::new(origin, voxel, UVec3::splat(64)).unwrap();
+        let tree = box_tree_in(grid);
+        let w = |p: Vec3| (origin + p.as_dvec3() * voxel).as_vec3();
+        let cam =
+            camera(w(Vec3::new(20.0, 45.0, -30.0)), w(Vec3::new(34.0, 30.0, 30.0)), 40.0, 12, 12);
+        let dof =
+            DepthOfField { lens_radius: 0.5 * voxel as f32, focus_distance: 50.0 * voxel as f32 };
+        let o = DifferentialOptions {
+            shadows: true,
+            depth_of_field: Some(dof),
+            ..opts(1.0, Compositing::CoverageMasks)
+        };
+        let light =
+            Light::Directional { to_light: Vec3::new(-0.4, 1.0, -0.7), irradiance: Vec3::ONE };
+        DifferentialRenderer::new(&tree, cam, light, o).unwrap().render(&albedo_only)
+    };
+    let unit = render(DVec3::ZERO, 1.0);
+    assert!(unit.pixels.iter().any(|p| p.w == 1.0) && unit.pixels.iter().any(|p| p.w == 0.0));
+    for (origin, voxel) in [(DVec3::splat(-3.0e-2), 1e-4), (DVec3::new(1e3, -2e3, 5e2), 1e4)] {
+        let other = render(origin, voxel);
+        let worst = unit
+            .pixels
+            .iter()
+            .zip(&other.pixels)
+            .map(|(a, b)| (*a - *b).abs().max_element())
+            .fold(0.0f32, f32::max);
+        // Measured: 6e-8 at 1e-4, 0 at 1e4; the same elements.
+        assert!(worst < 1e-5, "voxel {voxel}: worst {worst}");
+        assert_eq!(other.elements, unit.elements, "voxel {voxel}");
+    }
 }
 
 #[test]
