@@ -4,7 +4,7 @@
 use glam::{DVec3, Mat3, Vec3};
 use voxlod_format::records::MicrosurfaceRecord;
 
-use super::special::erf_f64;
+use super::special::erf_approx;
 use crate::payload::Payload;
 
 /// Gauss–Hermite nodes and weights for `E[f(Z)]`, `Z ~ N(0, 1)`, 8 points (exact for
@@ -18,6 +18,19 @@ const GAUSS_HERMITE: [(f64, f64); 8] = [
     (1.636_519_042_435_108, 0.117_239_907_661_759_02),
     (2.802_485_861_287_541_7, 0.009_635_220_120_788_267),
     (4.144_547_186_125_894, 0.000_112_614_538_375_367_77),
+];
+
+/// `erf(z/√2)` at the [`GAUSS_HERMITE`] nodes: a child's own colour profile `s(ε)` at
+/// `ε = σ·z`.
+const PROFILE: [f64; 8] = [
+    -0.999_965_951_415_681_6,
+    -0.994_928_956_087_327_6,
+    -0.898_268_996_346_759_4,
+    -0.410_168_214_744_767_95,
+    0.410_168_214_744_767_95,
+    0.898_268_996_346_759_4,
+    0.994_928_956_087_327_6,
+    0.999_965_951_415_681_6,
 ];
 
 /// In-plane spread `E|u|²` of the surface in a node, node units²: a node-sized square
@@ -215,6 +228,7 @@ impl Payload for MicrosurfacePayload {
 }
 
 /// One child as the parent's pre-filter sees it, parent units, relative to the parent's centre.
+#[derive(Clone, Copy, Default)]
 struct Child {
     c: f64,
     /// Offset of the child's centroid from the parent's plane.
@@ -253,7 +267,8 @@ fn prefilter(children: &[MicrosurfacePayload; 8]) -> MicrosurfacePayload {
     let n_p = if glen > 0.0 { g / glen } else { DVec3::ZERO };
     let centroid_p = Vec3::from(p.centroid).as_dvec3() / total;
     let albedo_p = Vec3::from(p.albedo).as_dvec3() / total;
-    let mut kids = Vec::with_capacity(8);
+    let mut slots = [Child::default(); 8];
+    let mut count = 0;
     for (k, ch) in children.iter().enumerate() {
         let c = ch.coverage as f64;
         if c <= 0.0 {
@@ -269,7 +284,7 @@ fn prefilter(children: &[MicrosurfacePayload; 8]) -> MicrosurfacePayload {
         let sin2 = (1.0 - cos * cos).max(0.0);
         let own = (ch.height_variance as f64 / c).max(0.0) * 0.25;
         let tilt_var = sin2 * SPREAD * 0.25 * 0.5;
-        kids.push(Child {
+        slots[count] = Child {
             c,
             delta,
             var: own * cos * cos + tilt_var,
@@ -278,12 +293,14 @@ fn prefilter(children: &[MicrosurfacePayload; 8]) -> MicrosurfacePayload {
             tilt_var,
             albedo: Vec3::from(ch.albedo).as_dvec3() / c,
             slope: Vec3::from(ch.albedo_slope).as_dvec3() / c,
-        });
+        };
+        count += 1;
     }
+    let kids = &slots[..count];
     let weight: f64 = kids.iter().map(|k| k.c).sum();
     let var_p = kids.iter().map(|k| k.c * (k.var + k.delta * k.delta)).sum::<f64>() / weight;
     p.height_variance = (total * var_p) as f32;
-    let slope = albedo_slope(&kids, var_p, albedo_p);
+    let slope = albedo_slope(kids, var_p, albedo_p);
     p.albedo_slope = (slope * total).as_vec3().to_array();
     p
 }
@@ -294,7 +311,7 @@ fn albedo_slope(kids: &[Child], var_p: f64, albedo_p: DVec3) -> DVec3 {
     if var_p <= 0.0 {
         return DVec3::ZERO;
     }
-    let s = |h: f64, var: f64| erf_f64(h / (2.0 * var).sqrt());
+    let s = |h: f64, var: f64| erf_approx(h / (2.0 * var).sqrt());
     let (mut num, mut den) = (DVec3::ZERO, 0.0);
     for k in kids {
         // E[s], closed form: a Gaussian blur of an erf is an erf.
@@ -303,13 +320,12 @@ fn albedo_slope(kids: &[Child], var_p: f64, albedo_p: DVec3) -> DVec3 {
         let mut s2 = 0.0;
         // E[s(h)·s_child(ε)], ε the child's own height: the tilt part of h blurs s in closed form.
         let mut cross = 0.0;
-        for &(z, w) in &GAUSS_HERMITE {
+        for (i, &(z, w)) in GAUSS_HERMITE.iter().enumerate() {
             let v = s(k.delta + k.var.sqrt() * z, var_p);
             s2 += w * v * v;
             if k.sigma > 0.0 {
                 let own = k.sigma * z;
-                cross +=
-                    w * s(k.delta + own * k.cos, var_p + k.tilt_var) * erf_f64(z / 2f64.sqrt());
+                cross += w * s(k.delta + own * k.cos, var_p + k.tilt_var) * PROFILE[i];
             }
         }
         num += k.c * ((k.albedo - albedo_p) * mean_s + k.slope * cross);

@@ -7,6 +7,7 @@ use voxlod_format::GridSpec;
 use voxlod_format::records::MicrosurfaceRecord;
 
 use super::*;
+use crate::microsurface::special::erf_f64;
 use crate::{BuildOptions, Octree};
 
 /// A leaf whose surface is the plane through `point` (voxel-local) with unit normal `n`.
@@ -341,5 +342,12 @@ mod planes {
                 }
             }
         }
+    }
+}
+
+#[test]
+fn the_profile_table_is_erf_at_the_nodes() {
+    for (i, &(z, _)) in GAUSS_HERMITE.iter().enumerate() {
+        assert!((PROFILE[i] - erf_f64(z / 2f64.sqrt())).abs() < 1e-15, "{i}");
     }
 }

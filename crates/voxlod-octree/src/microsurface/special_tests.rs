@@ -84,3 +84,16 @@ fn erfc_f32_is_within_its_bound_of_the_reference() {
         assert!((erf_f32(x) as f64 - erf_f64(x as f64)).abs() < 3e-7, "{x}");
     }
 }
+
+#[test]
+fn erf_approx_is_within_its_bound_everywhere() {
+    let mut worst = 0.0f64;
+    for i in -4000..=4000 {
+        let x = i as f64 * 0.0025;
+        worst = worst.max((erf_approx(x) - erf_f64(x)).abs());
+        assert_eq!(erf_approx(-x), -erf_approx(x));
+    }
+    assert!(worst <= 1.5e-7 && worst > 1e-9, "{worst:e}");
+    assert_eq!((erf_approx(f64::INFINITY), erf_approx(f64::NEG_INFINITY)), (1.0, -1.0));
+    assert!(erf_approx(f64::NAN).is_nan());
+}
