@@ -34,7 +34,6 @@ use voxlod_cpu::shading::shade;
 use voxlod_octree::{FlatOctree, GpuLevel, GpuNode, GpuTile, MicrosurfacePayload, Octree};
 use voxlod_scene::{Image, LightSample, MaterialSample};
 
-use crate::raycast::entry;
 use crate::{Context, Result};
 
 /// Smith's model in `f32` (prepended to the kernels).
@@ -197,12 +196,13 @@ impl<'a> DifferentialKernel<'a> {
         let ctx = self.ctx;
         let levels: &[GpuLevel] = &flat.levels;
         let nodes: &[GpuNode] = &flat.nodes;
+        // A binding holds at least one element: an octree without sparse levels has no tiles.
         let none = [GpuTile { links: [voxlod_octree::NONE; 3] }];
         let tiles: &[GpuTile] = if flat.tiles.is_empty() { &none } else { &flat.tiles };
         Ok(GpuMicrosurfaceOctree {
-            levels: ctx.storage_init("octree levels", bytemuck::cast_slice(levels))?,
-            nodes: ctx.storage_init("octree nodes", bytemuck::cast_slice(nodes))?,
-            tiles: ctx.storage_init("octree tiles", bytemuck::cast_slice(tiles))?,
+            levels: ctx.storage_array("octree levels", levels)?,
+            nodes: ctx.storage_array("octree nodes", nodes)?,
+            tiles: ctx.storage_array("octree tiles", tiles)?,
             payload: ctx
                 .storage_init("microsurface payloads", bytemuck::cast_slice(&flat.payload))?,
             depth: tree.depth(),
@@ -229,37 +229,16 @@ impl<'a> DifferentialKernel<'a> {
         let out_bytes = count * size_of::<GpuPixel>() as u64;
         let out = ctx.storage_zeroed("differential pixels", out_bytes)?;
         let params = Self::params(tree, renderer, ambient);
-        let layout = pipeline.get_bind_group_layout(0);
         let rows_per = (self.pixels_per_dispatch / width as u64).clamp(1, height as u64) as u32;
         let mut first = 0;
         while first < height {
             let rows = rows_per.min(height - first);
             let p = GpuDifferentialParams { size: [width, height, first, rows], ..params };
             let uniform = ctx.uniform("differential params", bytemuck::bytes_of(&p))?;
-            let bind = ctx.guarded("binding differential buffers", || {
-                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("differential cone tracing"),
-                    layout: &layout,
-                    entries: &[
-                        entry(0, &uniform),
-                        entry(1, &tree.levels),
-                        entry(2, &tree.nodes),
-                        entry(3, &tree.tiles),
-                        entry(4, &tree.payload),
-                        entry(5, masks),
-                        entry(6, &out),
-                    ],
-                })
-            })?;
-            let (lx, ly) = ctx.image_dispatch("differential dispatch", width, rows)?;
-            let mut encoder = ctx.device().create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(lx, ly, 1);
-            }
-            ctx.submit("differential cone tracing", encoder)?;
+            let buffers =
+                [&uniform, &tree.levels, &tree.nodes, &tree.tiles, &tree.payload, masks, &out];
+            let workgroups = ctx.image_dispatch("differential dispatch", width, rows)?;
+            ctx.dispatch("differential cone tracing", pipeline, &buffers, workgroups)?;
             first += rows;
         }
         let raw = ctx.read(&out, out_bytes)?;
@@ -325,23 +304,8 @@ impl<'a> DifferentialKernel<'a> {
         let input = ctx.storage_init("probe inputs", bytemuck::cast_slice(inputs))?;
         let bytes = inputs.len() as u64 * 8;
         let out = ctx.storage_zeroed("probe outputs", bytes)?;
-        let layout = pipeline.get_bind_group_layout(0);
-        let bind = ctx.guarded("binding probe buffers", || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("Smith probe"),
-                layout: &layout,
-                entries: &[entry(0, &input), entry(1, &out)],
-            })
-        })?;
-        let (gx, gy) = ctx.dispatch_size("Smith probe", (inputs.len() as u64).div_ceil(64))?;
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(gx, gy, 1);
-        }
-        ctx.submit("Smith probe", encoder)?;
+        let workgroups = ctx.dispatch_size("Smith probe", (inputs.len() as u64).div_ceil(64))?;
+        ctx.dispatch("Smith probe", pipeline, &[&input, &out], workgroups)?;
         Ok(bytemuck::pod_collect_to_vec(&ctx.read(&out, bytes)?))
     }
 }

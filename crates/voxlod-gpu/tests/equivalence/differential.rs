@@ -30,9 +30,9 @@ use glam::{DVec3, UVec3, Vec3};
 use voxlod_cone::{
     Compositing, DepthOfField, DifferentialOptions, DifferentialRenderer, Light, PinholeCamera,
 };
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::microsurface;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::sampler::SamplingContext;
 use voxlod_cpu::random::rand_f32;
 use voxlod_cpu::voxelize;
 use voxlod_format::records::MicrosurfaceRecord;

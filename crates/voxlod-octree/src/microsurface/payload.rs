@@ -335,7 +335,6 @@ fn albedo_slope(kids: &[Child], var_p: f64, albedo_p: DVec3) -> DVec3 {
 }
 
 #[cfg(test)]
-#[path = "payload_tests.rs"]
 mod tests;
 
 const _: () = assert!(size_of::<MicrosurfacePayload>() == 88);

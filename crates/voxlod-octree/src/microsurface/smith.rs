@@ -204,5 +204,4 @@ pub fn light_visibility_f32(lambda_v: f32, lambda_l: f32) -> f32 {
 }
 
 #[cfg(test)]
-#[path = "smith_tests.rs"]
 mod tests;

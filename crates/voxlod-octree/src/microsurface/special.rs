@@ -176,5 +176,4 @@ pub fn erf_approx(x: f64) -> f64 {
 }
 
 #[cfg(test)]
-#[path = "special_tests.rs"]
 mod tests;
