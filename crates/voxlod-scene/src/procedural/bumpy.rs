@@ -32,11 +32,14 @@ use crate::{Material, Result, Scene, Texture, TextureRef};
 pub struct BumpyParams {
     /// Icosphere subdivisions, 0..=7 (`20·4^subdiv` triangles). Default 6 (81 920).
     pub subdiv: u32,
-    /// Largest displacement, in (0, 0.5] (the sphere's radius is 1). Default 0.04.
+    /// Largest displacement, in (0, 0.5] (the sphere's radius is 1). Default 0.1.
     pub amplitude: f32,
-    /// Frequency of the first octave on the unit sphere, in (0, 1e4]. Default 6.
+    /// Frequency of the first octave on the unit sphere, in (0, 1e4]. Default 12 (slopes of
+    /// order 1: the relief masks and shadows itself away from normal incidence).
     pub frequency: f32,
-    /// Octaves of noise, 1..=12, each at twice the frequency and half the amplitude. Default 5.
+    /// Octaves of noise, 1..=12, each at twice the frequency and half the amplitude. Default 3
+    /// (the finest, 48 per unit, still resolved by subdivision 6's triangles: finer octaves
+    /// would be aliased by the mesh).
     pub octaves: u32,
     /// Random seed of the noise. Default 1.
     pub seed: u64,
@@ -52,9 +55,9 @@ impl Default for BumpyParams {
     fn default() -> Self {
         Self {
             subdiv: 6,
-            amplitude: 0.04,
-            frequency: 6.0,
-            octaves: 5,
+            amplitude: 0.1,
+            frequency: 12.0,
+            octaves: 3,
             seed: 1,
             height_colour: true,
             specular: 0.0,
@@ -64,12 +67,12 @@ impl Default for BumpyParams {
 }
 
 impl BumpyParams {
-    /// `bumpy-specular`'s defaults: grey, glossy, finer bumps.
+    /// `bumpy-specular`'s defaults: grey, glossy, finer and lower bumps.
     pub fn specular() -> Self {
         Self {
-            amplitude: 0.02,
-            frequency: 16.0,
-            octaves: 4,
+            amplitude: 0.03,
+            frequency: 20.0,
+            octaves: 2,
             height_colour: false,
             specular: 0.5,
             shininess: 200.0,
@@ -94,9 +97,11 @@ impl BumpyParams {
     }
 }
 
-/// The height ramp: dark red (valleys), orange, yellow, green (tops), as sRGB bytes.
+/// The height ramp, red in the valleys to green on the tops, each channel monotone in height
+/// (linear `(0.6, 0.05, 0.02)`, `(0.45, 0.2, 0.03)`, `(0.25, 0.35, 0.04)`, `(0.05, 0.5, 0.05)`),
+/// as sRGB bytes: the mean is a yellow-brown, the tops alone green.
 const RAMP: [[u8; 4]; 4] =
-    [[150, 20, 12, 255], [215, 110, 20, 255], [225, 200, 40, 255], [70, 160, 40, 255]];
+    [[203, 63, 39, 255], [179, 124, 48, 255], [137, 160, 56, 255], [63, 188, 63, 255]];
 
 /// The displaced sphere of `p` (module docs), named `name`.
 pub fn bumpy(name: &str, p: &BumpyParams) -> Result<Scene> {
@@ -176,7 +181,7 @@ mod tests {
         let colour = |i: usize| s.material_sample(0, m.uvs[i]).albedo;
         let (top, bottom) = (colour(hi), colour(lo));
         assert!(top.y > top.x && bottom.x > bottom.y * 2.0, "{top} {bottom}");
-        assert!(r(hi) > 1.0 && r(lo) < 1.0 && r(hi) - r(lo) <= 2.0 * 0.04 + 1e-6);
+        assert!(r(hi) > 1.0 && r(lo) < 1.0 && r(hi) - r(lo) <= 2.0 * 0.1 + 1e-6);
         // Outward normals.
         assert!(m.positions.iter().zip(&m.normals).all(|(p, n)| p.dot(*n) > 0.0));
     }

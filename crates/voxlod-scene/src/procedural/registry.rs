@@ -77,17 +77,17 @@ const BLINDS_PARAMS: &[ParamInfo] = &[
 
 const BUMPY_SPHERE_PARAMS: &[ParamInfo] = &[
     param("subdiv", "6", "icosphere subdivisions (20·4^subdiv triangles), 0..=7"),
-    param("amplitude", "0.04", "largest displacement (radius 1), (0, 0.5]"),
-    param("frequency", "6", "first octave's frequency on the unit sphere, (0, 1e4]"),
-    param("octaves", "5", "octaves of noise, 1..=12"),
+    param("amplitude", "0.1", "largest displacement (radius 1), (0, 0.5]"),
+    param("frequency", "12", "first octave's frequency on the unit sphere, (0, 1e4]"),
+    param("octaves", "3", "octaves of noise, 1..=12"),
     param("seed", "1", "random seed, any u64"),
 ];
 
 const BUMPY_SPECULAR_PARAMS: &[ParamInfo] = &[
     param("subdiv", "6", "icosphere subdivisions (20·4^subdiv triangles), 0..=7"),
-    param("amplitude", "0.02", "largest displacement (radius 1), (0, 0.5]"),
-    param("frequency", "16", "first octave's frequency on the unit sphere, (0, 1e4]"),
-    param("octaves", "4", "octaves of noise, 1..=12"),
+    param("amplitude", "0.03", "largest displacement (radius 1), (0, 0.5]"),
+    param("frequency", "20", "first octave's frequency on the unit sphere, (0, 1e4]"),
+    param("octaves", "2", "octaves of noise, 1..=12"),
     param("seed", "1", "random seed, any u64"),
     param("specular", "0.5", "specular level, [0, 1]"),
     param("shininess", "200", "Blinn-Phong exponent, [0, 1e4]"),
