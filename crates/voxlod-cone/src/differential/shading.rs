@@ -46,6 +46,8 @@ pub struct LocalIllumination {
     pub albedo: Vec3,
     /// `ā(v)`, the colour the ambient term sees.
     pub ambient_albedo: Vec3,
+    /// `ā`, the mean colour (what separate filtering of the colour gives, whatever the view).
+    pub mean_albedo: Vec3,
     /// `V̄(l)` in \[0, 1\].
     pub light_visibility: f32,
     /// Specular level.
@@ -86,6 +88,7 @@ pub fn local_illumination(
         lambda_light,
         albedo: visible(attribute_factor_f32(lambda_view, lambda_light)),
         ambient_albedo: visible(attribute_factor_f32(lambda_view, 0.0)),
+        mean_albedo: s.albedo.clamp(Vec3::ZERO, Vec3::ONE),
         light_visibility: if to_light.is_some() {
             light_visibility_f32(lambda_view, lambda_light)
         } else {
