@@ -15,6 +15,7 @@
 //! | [`filtered`] | the filtered-appearance representations of Brito, Poulin and Teichrieb (2023): Averages, \[VJK21\], virtual mesh + opacity subgrid, Adaptive |
 //! | [`volume`] | procedural participating media with metavoxels (McNabb, GPU Pro): attenuation models, metavoxel sizes, memory |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
+//! | [`heitz_neyret`] | Heitz and Neyret's (2012) pre-filtered surface statistics with coverage masks against alpha blending over distance: error, silhouettes, colour at grazing angles, cost, bytes per node |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
 //! cameras), [`spread`] (mean and range over views), [`alloc`] (peak heap memory per stage),
@@ -53,6 +54,7 @@ pub mod cone;
 mod error;
 pub mod filtered;
 mod ground_truths;
+pub mod heitz_neyret;
 pub mod machine;
 pub mod report;
 pub mod scenes;
