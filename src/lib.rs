@@ -40,3 +40,8 @@ pub use voxlod_gpu as gpu;
 pub use voxlod_octree as octree;
 pub use voxlod_scene as scene;
 pub use voxlod_studies as studies;
+
+/// The README's Rust examples, compiled and run as doc tests (`cargo test --doc -p voxlod`).
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -1,5 +1,5 @@
 //! `voxlod cone` end to end on a tiny setting: the sweep's rows, the references'
-//! noise, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
+//! own error, the leak experiment's rows, the report, and bad arguments; plus the one AO falloff
 //! shared by the cone tracer and the ray-traced reference.
 
 use std::process::Command;
@@ -46,8 +46,11 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     assert!(rows.iter().all(|r| r["ao_ssim"].as_f64().unwrap() < 1.0), "{rows:?}");
     assert_eq!(rows[0]["depth"], 3);
     assert_eq!(rows[4]["depth"], 4);
-    let noise = &v["reference_noise_mse"];
-    assert!(["ao", "indirect"].iter().all(|k| noise[k].as_f64().unwrap() >= 0.0), "{noise}");
+    let (seeds, error) = (&v["reference_seed_mse"], &v["reference_error_mse"]);
+    for k in ["ao", "indirect"] {
+        let (s, e) = (seeds[k].as_f64().unwrap(), error[k].as_f64().unwrap());
+        assert!(s >= 0.0 && e == s / 2.0, "{seeds} {error}");
+    }
     let octrees = v["octrees"].as_array().unwrap();
     assert_eq!(octrees[0]["resolution"], 8);
     assert!(octrees.iter().all(|o| o["voxels"].as_u64().unwrap() > 0), "{octrees:?}");
@@ -60,6 +63,16 @@ fn cone_command_measures_the_sweep_and_the_leaks() {
     }
     assert!(dir.join("report.md").exists());
     assert!(v["lod"].is_null());
+    // The references and the best rows are written out: 8-bit images and linear float data.
+    assert!(v["best_rows"]["ao"].as_str().unwrap().contains("step"), "{v}");
+    assert!(dir.join("assets/cone_references.png").exists());
+    for name in ["ao_reference", "ao_best", "indirect_reference", "indirect_best"] {
+        let bytes =
+            std::fs::read(dir.join(format!("assets/cone_reference_data/{name}.npy"))).unwrap();
+        let (shape, data) = voxlod::eval::npy::decode_f32(&bytes).unwrap();
+        assert_eq!(shape[..2], [16, 16], "{name}");
+        assert!(data.iter().all(|x| x.is_finite() && *x >= 0.0), "{name}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 
     for (args, needle) in [

@@ -7,7 +7,8 @@
 //! `what`: `setup` (build, inject, shading points only), `diffuse` (plus one pass of AO + 6
 //! diffuse cones at 160×90, the `cone/diffuse` bench's work), `frame` (plus one 320×180 frame of
 //! 6 diffuse + 1 specular cones, the `frame/320x180` bench's work), `frame1280` (the same at
-//! 1280×720, the frame). Subtract `setup` from the others. Prints the cone steps and a checksum of the results (bit-identical code gives the
+//! 1280×720, the frame size of Yalçıner and Sahillioğlu's timings). Subtract `setup` from the
+//! others. Prints the cone steps and a checksum of the results (bit-identical code gives the
 //! same checksum).
 
 #[path = "../benches/common/mod.rs"]

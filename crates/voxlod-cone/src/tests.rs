@@ -189,7 +189,7 @@ fn ambient_occlusion_under_a_ceiling_matches_the_analytic_value() {
     let expected = ceiling_ao(5.0, 10.0);
     assert!((ao - expected).abs() < 0.05, "narrow-cone AO {ao} vs analytic {expected}");
     // 30° cones meet the ceiling at levels 1–3 where its coverage is 1/2–1/8: they
-    // under-estimate the occlusion of a thin occluder (the known VCT leak; was 0.90 vs 0.75).
+    // under-estimate the occlusion of a thin occluder (the known VCT leak: 0.90 against 0.75).
     let wide =
         ConeTracer::new(&tree, TraceOptions { diffuse_aperture_deg: 30.0, ..options }).unwrap();
     let ao30 = wide.ambient_occlusion(Vec3::new(32.0, 1.0, 32.0), Vec3::Y);
@@ -270,9 +270,9 @@ fn injection_lights_facing_leaves_and_marches_shadows() {
 fn shadow_march_stops_at_a_point_light_just_below_a_ceiling() {
     // The Cornell box's light hangs 1.1 voxels below its ceiling's voxel centres (at 32³):
     // nothing lies between the floor and the light, so the marched visibility of a floor leaf
-    // under it must be 1 (exact: no occupied voxel's trilinear support meets the ray). The
-    // march used to run its full centre-to-light distance from the offset apex, 1.5 voxels
-    // past the light and into the ceiling, and injected V ≈ 0 there.
+    // under it must be 1 (exact: no occupied voxel's trilinear support meets the ray). A march
+    // that ran the full centre-to-light distance from the offset apex would end 1.5 voxels
+    // past the light, in the ceiling, and inject V ≈ 0 there.
     let n = 32;
     let ceiling: Vec<_> = (0..n)
         .flat_map(|x| (0..n).map(move |z| (UVec3::new(x, n - 1, z), white(Vec3::NEG_Y))))
@@ -331,7 +331,7 @@ fn diffuse_cones_gather_a_lit_floor() {
     let e = tracer.diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!((e.x - 0.97).abs() < 0.05, "{e}");
     // 30° cones read the 1-voxel floor at coarse levels where its coverage is small and
-    // leak past it (0.45 when written); directional opacities keep the floor opaque along y.
+    // leak past it (to about 0.45); directional opacities keep the floor opaque along y.
     let tracer = ConeTracer::new(&radiance, TraceOptions::default()).unwrap();
     let e30 = tracer.diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!(e30.x < e.x - 0.1, "{e30} vs {e}");
@@ -342,7 +342,7 @@ fn diffuse_cones_gather_a_lit_floor() {
         .diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::NEG_Y);
     assert!(e_aniso.x > e30.x + 0.05 && e_aniso.x < 1.0, "{e_aniso} vs {e30}");
     // Facing up, nothing above: no indirect light for narrow cones; 30° cones reach levels
-    // whose nodes span the floor too and pick up a little (0.021 when written).
+    // whose nodes span the floor too and pick up a little (about 0.02).
     let e =
         ConeTracer::new(&radiance, narrow).unwrap().diffuse(Vec3::new(32.0, 5.0, 32.0), Vec3::Y);
     assert!(e.max_element() < 1e-4, "{e}");
@@ -363,8 +363,8 @@ fn diffuse_cones_gather_a_lit_floor() {
 /// AO and diffuse light from the same cones (what `voxlod cone` asks for) equal each traced
 /// alone: the AO radius must not end the diffuse march. A point at height 4 under nothing,
 /// facing a lit floor 4 voxels below, with an AO radius of 2: the floor lies beyond the AO
-/// radius, so AO is 1 and the diffuse light is what `diffuse` alone gathers (it used to be
-/// cut to zero at the radius).
+/// radius, so AO is 1 and the diffuse light is what `diffuse` alone gathers, not cut to zero
+/// at the radius.
 #[test]
 fn ao_and_diffuse_together_equal_each_alone() {
     let n = 64;
@@ -402,7 +402,7 @@ fn directional_opacities_leak_less_through_a_thin_wall() {
     let a_iso = trace(&iso, &cone, &m).opacity;
     let a_aniso = trace(&aniso, &cone, &m).opacity;
     assert!(a_aniso > a_iso + 0.05, "directional {a_aniso} vs isotropic {a_iso}");
-    // Measured when written: isotropic 0.068, directional 0.76.
+    // The march gives isotropic 0.068, directional 0.76; the bounds keep the gap, not the digits.
     assert!(a_iso < 0.2 && a_aniso > 0.5 && a_aniso <= 1.0, "{a_iso} {a_aniso}");
 }
 
@@ -474,10 +474,10 @@ fn furnace_closed_box_of_uniform_radiance() {
     // every direction ends on the shell, so the exact E/π is 1; whatever a cone brings back
     // short of 1 went through the shell. 30° cones reach it at levels 2–3. The isotropic
     // pre-filter (mean of the eight children) halves a 1-voxel wall's opacity per level: 0.36–
-    // 0.39 when written, the leak that halved builtin:cornell's indirect light. Directional
+    // 0.39, the leak that halves builtin:cornell's indirect light. Directional
     // opacities (composited along the axes) keep a wall opaque along its normal at every
     // level, but the cone blends the six by dir², so an oblique cone still sees a wall node
-    // as partly open (0.5·1 + 0.5·¼ at 45° at level 2): 0.76–0.78 when written. Bounds: the
+    // as partly open (0.5·1 + 0.5·¼ at 45° at level 2): 0.76–0.78. Bounds: the
     // directional answer in [0.7, 1] and at least 0.2 above the isotropic one.
     let n = 32;
     let mut v = Vec::new();

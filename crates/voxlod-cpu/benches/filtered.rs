@@ -29,7 +29,7 @@ use voxlod_scene::{Camera, Light, Scene};
 
 use support::{bunny, framing, prepare, single_core};
 
-/// Image edge and grid resolution of the figure.
+/// Image edge and grid resolution: 256² pixels of a 256³ grid.
 const SIZE: u32 = 256;
 const RES: u32 = 256;
 

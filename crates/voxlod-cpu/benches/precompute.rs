@@ -4,7 +4,7 @@
 //!
 //! `cargo bench -p voxlod-cpu --bench precompute`; before the criterion runs it prints
 //! single-core CPU times (which other processes on the machine do not distort) and the
-//! issue's target, 50 000 voxels/s per core on the bunny at 256³. Set
+//! target, 50 000 voxels/s per core on the bunny at 256³. Set
 //! `VOXLOD_BENCH_FITS=subgrid,vjk21,virtual-mesh` (any of them, comma-separated) to also time,
 //! on one core, sampling plus that fit: the subgrid alone, \[VJK21\] (SGGX + transmittance),
 //! the virtual mesh (SGGX, faces, subgrid).
@@ -21,7 +21,7 @@ use voxlod_scene::Scene;
 
 use support::{bunny, forest_of, pool, single_core, voxelized};
 
-/// The target on the bunny at 256³.
+/// The precompute's throughput target on the bunny at 256³, voxels per second per core.
 const TARGET_PER_CORE: f64 = 50_000.0;
 
 fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene, res: u32, samples: usize) {

@@ -75,6 +75,20 @@ pub enum Error {
         /// Number of cells given.
         got: usize,
     },
+    /// An array's shape does not hold its values.
+    #[error("an array of shape {shape:?} holds {values} values")]
+    ArrayShape {
+        /// The shape given.
+        shape: Vec<usize>,
+        /// The number of values.
+        values: usize,
+    },
+    /// Bytes that are not the `.npy` layout this crate writes.
+    #[error("not a readable .npy array: {why}")]
+    Npy {
+        /// What is wrong.
+        why: String,
+    },
     /// A report asset name is empty or holds characters other than `[A-Za-z0-9_-]`.
     #[error("invalid asset name '{name}': use letters, digits, '-' and '_' only")]
     InvalidAssetName {

@@ -1,6 +1,7 @@
-//! Cross-check of MSE, PSNR and SSIM against scikit-image (the requirement: "It must agree with
+//! Cross-check of MSE, PSNR and SSIM against scikit-image: every value must agree with
 //! scikit-image's `structural_similarity(..., gaussian_weights=True, sigma=1.5,
-//! use_sample_covariance=False, data_range=1.0, channel_axis=-1)` to 1e-4").
+//! use_sample_covariance=False, data_range=1.0, channel_axis=-1)` (and its MSE and PSNR) within
+//! 1e-4.
 //!
 //! The reference numbers below were measured, not typed: they are the output of
 //!
@@ -19,7 +20,7 @@ use voxlod_eval::patterns::{
 };
 use voxlod_scene::Srgb8Image;
 
-/// The contract of the issue.
+/// The agreement required with scikit-image, per value.
 const TOLERANCE: f64 = 1e-4;
 
 const METRICS: [&str; 4] = ["MSE", "PSNR", "SSIM", "SSIM map mean"];

@@ -157,6 +157,7 @@ impl<T> BrickMap<T> {
                 map.bricks.push(BrickHeader {
                     morton: brick,
                     mask: [0; 8],
+                    // Wraps only past u32::MAX values, refused below before the map escapes.
                     first: map.values.len() as u32,
                     _pad: 0,
                 });
@@ -165,6 +166,7 @@ impl<T> BrickMap<T> {
             header.mask[(local >> 6) as usize] |= 1 << (local & 63);
             map.values.push(v);
         }
+        check_value_count(map.values.len())?;
         map.rebuild_lookup();
         Ok(map)
     }
@@ -285,6 +287,9 @@ impl<T> BrickMap<T> {
     }
 
     /// Coordinate of the voxel holding `values()[index]`.
+    ///
+    /// # Panics
+    /// If `index` is not below [`BrickMap::len`].
     pub fn coord_of(&self, index: usize) -> UVec3 {
         let b = self.bricks.partition_point(|h| h.first as usize <= index) - 1;
         let header = &self.bricks[b];
@@ -476,6 +481,15 @@ fn inside_mask(origin: UVec3, dims: UVec3) -> [u64; 8] {
     mask
 }
 
+/// Brick offsets are `u32`: a map holds at most `u32::MAX` values (reachable with a zero-sized
+/// record such as `Occupancy` on a 2048³ solid grid), refused rather than wrapped.
+fn check_value_count(len: usize) -> Result<()> {
+    if len as u64 > u32::MAX as u64 {
+        return Err(Error::TooManyVoxels { voxels: len as u64, max: u32::MAX as u64 });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -588,5 +602,12 @@ mod tests {
         assert_eq!(map.bricks().len(), 1);
         assert!(map.memory_bytes() < 1024, "{} bytes", map.memory_bytes());
         assert_eq!(map.get(UVec3::splat(123_456)), Some(&7));
+    }
+
+    #[test]
+    fn more_values_than_u32_offsets_address_are_refused() {
+        assert!(check_value_count(u32::MAX as usize).is_ok());
+        let err = check_value_count(u32::MAX as usize + 1).unwrap_err();
+        assert!(matches!(err, Error::TooManyVoxels { voxels: 4_294_967_296, .. }), "{err}");
     }
 }

@@ -19,6 +19,14 @@ pub enum Error {
         /// The largest supported extent per axis.
         max: u64,
     },
+    /// More voxels than a brick map can address (brick offsets are `u32`).
+    #[error("{voxels} voxels: a brick map addresses at most {max} (u32 offsets)")]
+    TooManyVoxels {
+        /// The voxels given (at least).
+        voxels: u64,
+        /// The most a brick map holds.
+        max: u64,
+    },
     /// A grid parameter is not usable (zero dimension, non-finite origin, non-positive size).
     #[error("invalid grid: {reason}")]
     InvalidGrid {

@@ -8,7 +8,8 @@
 //! and the drop of the result are outside). Throughput is in voxels per second for builds,
 //! samples per second for sampling. Each build includes the ones above it:
 //! - `build/topology`: [`Topology`] alone, the occupied levels and their child structure (an
-//!   SVO without payloads, closure or links), what the 20 M voxels/s target is about;
+//!   SVO without payloads, closure or links), whose throughput target is 20 M voxels/s on 2
+//!   cores;
 //! - `build/links`: the octree with an opacity-only payload (4 bytes, trivial prefilter): the
 //!   topology, the closure nodes and tiles, the dense top levels and the neighbour links;
 //! - `build/averages`, `build/averages+directional`: the same with Averages pre-filtering (28

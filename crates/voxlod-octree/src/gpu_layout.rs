@@ -1,6 +1,6 @@
 //! A GPU-friendly flat layout ([`FlatOctree`]: one node array, one payload array, a level
-//! table) and a CPU emulation of the lock-free level-by-level build a wgpu kernel will run
-//! ([`FlatOctree::build_level_by_level`]), checked against the reference build.
+//! table) and a CPU emulation of the lock-free level-by-level build that voxlod-gpu's `octree`
+//! kernel runs ([`FlatOctree::build_level_by_level`]), checked against the reference build.
 //!
 //! # Layout
 //! All levels are concatenated, root first (level `depth` … level 0), so that a storage buffer

@@ -7,8 +7,8 @@
 //! of forward links per 2×2×2 tile of every sparse level, leaves included** (`[u32; 3]`, 1.5
 //! bytes per node), on the occupied nodes *and* on the nodes the backward closure and the tiles
 //! add (`octree` module docs), which on surfaces are several times the occupied ones.
-//! [`MemoryStats`] measures each part; the crate README gives the figures for a sphere shell
-//! (`benches/build.rs`). [`crate::Topology::memory_bytes`] gives the occupied levels alone.
+//! [`MemoryStats`] measures each part; `cargo bench -p voxlod-octree --bench build` prints them
+//! for a sphere shell. [`crate::Topology::memory_bytes`] gives the occupied levels alone.
 
 use crate::octree::Octree;
 use crate::payload::Payload;

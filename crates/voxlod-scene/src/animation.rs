@@ -1,6 +1,6 @@
-//! Node hierarchy, skins and animations, read from glTF and kept for the dynamic-scene pipeline
-//! (a later issue). Static renders use the world-space meshes of [`crate::Scene`] and ignore
-//! these.
+//! Node hierarchy, skins and animations, read from glTF and kept with the scene (`voxlod info`
+//! lists them). Nothing in voxlod animates a scene yet: renders use the world-space meshes of
+//! [`crate::Scene`], flattened at the rest pose, and ignore these.
 
 use glam::Mat4;
 

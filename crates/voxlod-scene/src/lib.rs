@@ -1,11 +1,95 @@
-//! Scene inputs for voxlod: triangle [`Mesh`]es in world space, [`Material`]s with
-//! [`Texture`]s, a pinhole [`Camera`], [`Light`]s, the background colour, and float/8-bit
-//! [`image`]s; loaders for OBJ+MTL ([`obj`]) and glTF 2.0 ([`gltf`]); deterministic procedural
-//! scenes ([`procedural`]); displaced-sphere particles for procedural volumes ([`particles`]).
+//! The scene inputs of voxlod: triangle [`Mesh`]es in world space, [`Material`]s with
+//! [`Texture`]s, a pinhole [`Camera`], [`Light`]s and the background colour; loaders for OBJ + MTL
+//! ([`obj`]) and glTF 2.0 ([`gltf`]) that turn every malformed file into an [`Error`] naming the
+//! file and the element; deterministic procedural scenes that need no download ([`procedural`]);
+//! float and 8-bit sRGB [`image`]s; and the displaced-sphere particles of procedural
+//! participating media ([`particles`]).
 //!
-//! Conventions (the CPU↔GPU contract): right-handed, y up; colours are linear RGB unless a name
-//! says sRGB; texture coordinates have their origin at the image's top-left corner, v pointing
-//! down (glTF's convention — the OBJ loader flips v).
+//! A [`Scene`] flattens into a [`Geometry`], the triangle arrays voxlod's voxelizers and ray
+//! casters consume.
+//!
+//! # Example
+//! Load an OBJ from memory, frame it with a camera, build a procedural scene and flatten it, and
+//! see a malformed file refused. [`Scene::load`] loads an `.obj`, `.gltf` or `.glb` file from
+//! disk and validates it.
+//! ```
+//! use std::path::Path;
+//!
+//! use glam::{Vec2, Vec3};
+//! use voxlod_scene::{Error, obj, procedural};
+//!
+//! # fn main() -> voxlod_scene::Result<()> {
+//! // OBJ text from memory (companion MTL and texture files come through the resolver).
+//! let text = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nf 1 2 3 4\n";
+//! let no_files = |_: &Path| Err(std::io::ErrorKind::NotFound.into());
+//! let (quad, report) = obj::load_from_str(Path::new("quad.obj"), text, no_files)?;
+//! assert_eq!((quad.triangle_count(), report.polygons_triangulated), (2, 1));
+//! assert_eq!(quad.bounds()?, (Vec3::ZERO, Vec3::new(2.0, 1.0, 0.0)));
+//!
+//! // A camera framing it: the quad's centre projects to the image's centre.
+//! let frame = quad.default_camera()?.frame(64, 64);
+//! let (pixel, _depth) = frame.project(Vec3::new(1.0, 0.5, 0.0)).expect("in front of the eye");
+//! assert!((pixel - Vec2::splat(32.0)).length() < 1e-3);
+//!
+//! // A procedural scene by name: deterministic, flattened into one triangle array.
+//! let forest = procedural::from_spec("forest?trees=2&leaves=100&seed=3")?;
+//! let geometry = forest.geometry();
+//! assert_eq!(geometry.triangle_count(), forest.triangle_count());
+//! assert_eq!(forest, procedural::from_spec("forest?trees=2&leaves=100&seed=3")?);
+//!
+//! // Bad input is an error naming the file and the line, not a panic.
+//! let err = obj::load_from_str(Path::new("bad.obj"), "v 0 0 nan\n", no_files).unwrap_err();
+//! assert!(matches!(err, Error::Obj { .. }) && err.to_string().starts_with("bad.obj: line 1"));
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! # Conventions
+//! The CPU↔GPU contract: right-handed, y up; colours are linear RGB unless a name says sRGB; a
+//! white Lambertian surface facing a directional light of irradiance `E` has radiance `E/π`;
+//! texture coordinates have their origin at the image's top-left corner, v pointing down
+//! (glTF's convention — the OBJ loader flips v); pixel `(x, y)` has its centre at
+//! `(x + 0.5, y + 0.5)` from the image's top-left corner ([`camera::CameraFrame::ray_dir`]).
+//!
+//! # Main types
+//! | item | what it is |
+//! |---|---|
+//! | [`Scene`] | meshes, materials, textures, camera, lights, background; [`Scene::load`], [`Scene::geometry`], [`Scene::default_camera`] |
+//! | [`Mesh`], [`Geometry`] | one indexed triangle mesh in world space; all of a scene's triangles in flat arrays with a material per triangle |
+//! | [`Material`], [`Texture`], [`Sampler`] | base colour (factor × sRGB texture, bilinear in linear space), Blinn-Phong specular, [`AlphaMode`], sidedness |
+//! | [`Camera`], [`camera::CameraFrame`] | a look-at pinhole camera and the one primary-ray convention |
+//! | [`Light`] | one directional or point light, [`Light::sample`]d at a point |
+//! | [`Image`], [`Srgb8Image`] | linear float RGBA as renderers produce it; 8-bit sRGB as PNGs hold it and metrics score it |
+//! | [`obj`], [`gltf`] | the loaders, each with a `LoadReport` of what was skipped or repaired and a `load_from_bytes` that reads companion files through a resolver |
+//! | [`procedural`] | `forest`, `island`, `blinds` and `cornell`, `cube`, `sphere`, by name ([`procedural::from_spec`]) or from parameter structs; pure functions of their parameters and seed |
+//! | [`particles`] | displaced spheres, their animation, and deterministic smoke, explosion and cloud generators |
+//!
+//! # Errors
+//! Every fallible call returns [`Error`]: a file that cannot be read ([`Error::Io`]); a
+//! malformed OBJ/MTL file, with the line ([`Error::Obj`]), or glTF file, with the element
+//! ([`Error::Gltf`]); an image that cannot be decoded ([`Error::Image`]); a mesh with a
+//! non-finite attribute, an index out of range or attribute arrays of different lengths
+//! ([`Error::NonFinite`], [`Error::IndexOutOfRange`], [`Error::AttributeLength`]); a material or
+//! texture that does not exist ([`Error::DanglingReference`]); no triangles where some are needed
+//! ([`Error::EmptyScene`]); a parameter or particle field out of its range, with the range
+//! ([`Error::InvalidParameter`], [`Error::InvalidParticle`]); a file type it does not load
+//! ([`Error::UnsupportedFormat`]).
+//!
+//! # What this crate does not do
+//! - It does not render, voxelize or build acceleration structures (voxlod-cpu does).
+//! - glTF materials are shaded as Lambert diffuse with their base colour: metallic-roughness
+//!   parameters, normal maps, emission and `KHR_lights_punctual` are not read.
+//! - Node hierarchies, skins and animations are read from glTF and kept ([`Scene::nodes`]), but
+//!   nothing in voxlod animates a scene: meshes are flattened at the rest pose.
+//! - Formats: OBJ + MTL, glTF 2.0 (`.gltf`, `.glb`), textures in PNG and JPEG; files are read
+//!   whole into memory.
+//!
+//! It depends on voxlod-format (sRGB conversions, atomic output) and on no GPU API.
+//!
+//! # References
+//! - McNabb 2015, "Sparse Procedural Volume Rendering", GPU Pro 6, §5.5.2: [`particles`].
+//! - Steele, Lea, Flood 2014, "Fast Splittable Pseudorandom Number Generators", OOPSLA
+//!   (SplitMix64): [`procedural::Rng`].
 
 #![deny(missing_docs)]
 
@@ -32,3 +116,8 @@ pub use material::{AlphaMode, Material, MaterialSample, TextureRef};
 pub use mesh::Mesh;
 pub use scene::{Geometry, Scene};
 pub use texture::{Sampler, Texture, WrapMode};
+
+/// The README's example, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctest;

@@ -1,5 +1,5 @@
-//! The filtered-appearance comparison of one scene (HPG 2023 paper, Tables 1 and 2,
-//! regenerated): at each voxel resolution, every representation is precomputed from the same
+//! The filtered-appearance comparison of one scene (Brito, Poulin and Teichrieb 2023, Tables 1
+//! and 2, regenerated): at each voxel resolution, every representation is precomputed from the same
 //! per-voxel ray samples, rendered from the same cameras as the ground truth at an image size
 //! equal to the voxel resolution and at a higher one, and scored against the ground truth.
 //!

@@ -1,6 +1,6 @@
 //! The default report behind `cargo run --release` (`voxlod report`): for each embedded scene,
 //! render the ground truth from several viewpoints (and a second ground truth with another
-//! seed, to state its own noise), voxelize at a few resolutions, render each representation
+//! seed, to estimate its own error), voxelize at a few resolutions, render each representation
 //! from the same cameras, score it against the ground truth on 8-bit sRGB, and collect time and
 //! peak memory per stage ([`crate::baseline`], [`crate::filtered`]); then the procedural-volume
 //! study ([`crate::volume`]) and the cone-tracing study ([`crate::cone`]), all into one
@@ -68,7 +68,8 @@ pub struct Config {
 impl Config {
     /// The default run: three embedded scenes, the baseline at 32³ to 256³, the filtered
     /// representations at 64³ (64² and 128² images), 128 rays per pixel for the ground truth
-    /// (its measured noise is reported and far below the differences measured), three views.
+    /// (its own error, estimated from a second seed, is reported and is far below the errors
+    /// measured), three views.
     pub fn quick() -> Self {
         Self {
             scenes: default_scenes(),
@@ -92,7 +93,8 @@ impl Config {
         }
     }
 
-    /// Paper-scale settings: 128³ and 256³, 256² images, 1024 rays per pixel.
+    /// Paper-scale settings: the baseline at 64³ to 256³, the filtered representations at 128³
+    /// and 256³ ([`FilteredConfig::full`]), 256² images, 1024 rays per pixel, four views.
     pub fn full() -> Self {
         Self {
             resolutions: vec![64, 128, 256],

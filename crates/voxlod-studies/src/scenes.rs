@@ -52,9 +52,9 @@ pub fn builtin_names() -> Vec<(&'static str, &'static str)> {
 /// Loads the scene a spec names (see the module docs) and validates it.
 ///
 /// ```
-/// let bunny = voxlod::scenes::load("builtin:bunny").unwrap();
+/// let bunny = voxlod_studies::scenes::load("builtin:bunny").unwrap();
 /// assert_eq!(bunny.triangle_count(), 3674);
-/// let err = voxlod::scenes::load("builtin:bunny?seed=3").unwrap_err();
+/// let err = voxlod_studies::scenes::load("builtin:bunny?seed=3").unwrap_err();
 /// assert!(err.to_string().contains("seed"));
 /// ```
 pub fn load(spec: &str) -> Result<Scene> {

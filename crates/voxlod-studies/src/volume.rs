@@ -520,12 +520,16 @@ impl VolumeResult {
         let result = self;
         report.heading(2, format!("Procedural volume: {}", result.preset));
         report.text(
-        "Metavoxel pipeline (McNabb, GPU Pro, sparse procedural volume rendering): binning, culling, fill, light propagation, eye march in \
-         the over/under sort order, composited over the mesh render (its depth stops the rays, \
-         its BVH shadows the volume, and the volume shadows it: the mesh is rendered again \
-         with Volume::transmittance_to_light filtering each shading point's direct light). Errors are of the composited 8-bit sRGB image against the \
-         exact reference; times are wall-clock on this machine, all cores.",
-    );
+            "Metavoxel pipeline (McNabb 2015, GPU Pro 6): binning, culling, fill, light \
+             propagation, eye march in the over/under sort order, composited over the mesh render \
+             (its depth stops the rays, its BVH shadows the volume, and the volume shadows it: the \
+             mesh is rendered again with Volume::transmittance_to_light filtering each shading \
+             point's direct light). Errors are of the composited 8-bit sRGB image against the \
+             exact reference. Every image uses the same mesh rays (one seed) and the marches are \
+             deterministic, so these errors carry no sampling noise: they are the models' own \
+             differences from the exact march for this configuration. Times are wall-clock on \
+             this machine, all cores.",
+        );
         report.text(format!(
             "Volume built and marched on {}{}.",
             result.backend,

@@ -10,7 +10,7 @@ use voxlod_cpu::raycast::Bvh;
 use voxlod_scene::procedural::{ForestParams, forest};
 use voxlod_scene::{Camera, Geometry, Scene};
 
-/// The image edge of the primary-ray benches (the 512×512).
+/// The image edge of the primary-ray benches: 512×512 pixels.
 pub const SIZE: u32 = 512;
 
 /// The bunny of `assets/bunny/bunny.obj` (npm `bunny`, 3 674 triangles).

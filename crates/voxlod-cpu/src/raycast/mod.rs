@@ -64,26 +64,13 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// The build preset, chosen by measurement on this 2-core machine: obvhs's `slow_build`
-    /// (PLOC with spatial pre-splits and more reinsertion). It traces fastest in every view,
-    /// by 10–30 % over `medium_build`, for about twice its build time; the ground truth casts
-    /// hundreds of millions of rays per image, so tracing dominates. Where builds dominate
-    /// (a BVH rebuilt per frame), pass a faster preset to [`Bvh::with_params`].
-    ///
-    /// Single core, CPU time (other processes on the machine excluded), two runs of
-    /// `VOXLOD_BENCH_PRESETS=1 cargo bench -p voxlod-cpu --bench raycast`: builds of the bunny
-    /// (3 674 triangles) and of the forest (1.0 M triangles); traces of 512×512 camera rays in
-    /// 2×2 packets, in million rays per CPU-second, on the bunny's framing view (21 % of the
-    /// rays hit), its close-up (all hit) and the forest's framing view.
-    ///
-    /// | preset | build bunny | build forest | bunny framing | bunny close-up | forest framing |
-    /// |---|---|---|---|---|---|
-    /// | `fastest_build` | 3.5 ms | 1.50–1.55 s | 8.4–8.6 | 3.5–3.8 | 4.6–5.1 |
-    /// | `very_fast_build` | 2.3–2.4 ms | 1.17–1.34 s | 8.6–9.2 | 3.6–5.2 | 5.6–5.9 |
-    /// | `fast_build` | 2.8–2.9 ms | 1.62–1.71 s | 9.2–10.0 | 3.4–3.6 | 5.8–6.5 |
-    /// | `medium_build` | 2.6–3.0 ms | 1.67–1.86 s | 9.4–9.7 | 4.0–4.2 | 5.9–6.4 |
-    /// | **`slow_build`** | 4.8–5.7 ms | 3.30–3.55 s | 10.6–13.7 | 4.2–5.1 | 6.6–7.8 |
-    /// | `very_slow_build` | 10.0–12.8 ms | 14.8–15.2 s | 8.2–8.6 | 4.0–4.1 | 5.9–6.2 |
+    /// The build preset: obvhs's `slow_build` (PLOC with spatial pre-splits and more
+    /// reinsertion). It traces fastest of obvhs's presets in every view `benches/raycast.rs`
+    /// measures (the bunny framed and close up, the forest framed), for about twice the build
+    /// time of `medium_build`; the ground truth casts hundreds of millions of rays per image, so
+    /// tracing dominates. Where builds dominate (a BVH rebuilt per frame), pass a faster preset
+    /// to [`Bvh::with_params`]. `VOXLOD_BENCH_PRESETS=1 cargo bench -p voxlod-cpu --bench
+    /// raycast` prints the build and trace times of every preset.
     pub const DEFAULT_PARAMS: BvhBuildParams = BvhBuildParams::slow_build();
 
     /// Builds the BVH with [`Bvh::DEFAULT_PARAMS`].
@@ -289,25 +276,56 @@ impl Bvh {
     }
 }
 
-/// The origin of a ray leaving the surface of `triangle` at `point` toward `dir`, moved off the
-/// surface so that the ray cannot hit the triangle it starts on.
+/// The origin of a secondary ray (shadow, AO, bounce) leaving the surface of `triangle` at
+/// `point` toward `dir`, where `point` was reached by a ray arriving from the side `to_viewer`
+/// points to (for a camera hit, `eye − point`; for a bounce, minus the incoming direction).
+/// The origin is moved off every surface `point` lies on, so that no face through `point` is
+/// reported at `t ≈ 0`.
 ///
-/// Rule: move along the geometric normal, on the side `dir` points to, by
-/// `2⁻¹⁶ · max |vertex coordinate|` of the triangle. A hit point interpolated from barycentrics
-/// is off the plane by a few ULPs of the largest vertex coordinate (≈ 2⁻²² of it), and the
-/// watertight test translates vertices to the origin with the same relative error, so the
-/// offset has a margin of about 64×; it scales with the coordinates, so a scene scaled by 10⁻⁴
-/// or 10⁵ shadows the same. The price is that blockers closer than the offset (≈ 1.5·10⁻⁵ of
-/// the coordinates' magnitude) are missed.
-pub fn offset_origin(geometry: &Geometry, triangle: u32, point: Vec3, dir: Vec3) -> Vec3 {
+/// Rule, with `n` the unit geometric normal of `triangle` on the side `dir` points to, `v` the
+/// unit `to_viewer`, `c = n · v` and `ε = 2⁻¹⁶ · max |vertex coordinate|` of the triangle:
+/// - `c ≥ 1/64` (the point was seen from `dir`'s side): `point + v · ε / c`, i.e. back along
+///   the ray that found the point, to `ε` above the triangle's own plane. That segment is free
+///   space (the point was the ray's first hit), so the origin is in front of *every* face
+///   through the point: a point on an edge or a corner (a camera ray landing exactly on the
+///   seam of a room's floor and wall) also lies on the adjacent faces, and moving along `n`
+///   alone would slide it within them — or, in a sharp concave wedge, through them. Rays that
+///   leave into an adjacent face then hit it at a small `t > 0`, rays that leave away from it
+///   miss it: the value at the seam is the limit from the visible side.
+/// - otherwise (no viewer, a view within 0.9° of the plane, or `dir` on the far side):
+///   `point + n · ε`, off the triangle's own plane only.
+///
+/// Why `ε`: a hit point interpolated from barycentrics is off the plane by a few ULPs of the
+/// largest vertex coordinate (≈ 2⁻²² of it), and the watertight test translates vertices to
+/// the origin with the same relative error, so `ε` has a margin of about 64×; it scales with the
+/// coordinates, so a scene scaled by 10⁻⁴ or 10⁵ shadows the same. The price is that blockers
+/// closer than `ε` (at most `64 ε` along `v`) are missed. A degenerate triangle (no normal)
+/// uses `dir` for `n`. The WGSL mirror (voxlod-gpu's ground truth) is the same arithmetic in
+/// the same order.
+pub fn offset_origin(
+    geometry: &Geometry,
+    triangle: u32,
+    point: Vec3,
+    dir: Vec3,
+    to_viewer: Vec3,
+) -> Vec3 {
     let [a, b, c] = geometry.triangle(triangle as usize);
     let n = (b - a).cross(c - a);
     let scale = a.abs().max(b.abs()).max(c.abs()).max_element();
     let eps = scale * (1.0 / 65_536.0);
-    match n.try_normalize() {
-        Some(n) => point + if n.dot(dir) >= 0.0 { n } else { -n } * eps,
-        None => point + dir.normalize_or_zero() * eps,
-    }
+    let n = match n.try_normalize() {
+        Some(n) => {
+            if n.dot(dir) >= 0.0 {
+                n
+            } else {
+                -n
+            }
+        }
+        None => dir.normalize_or_zero(),
+    };
+    let v = to_viewer.normalize_or_zero();
+    let c = n.dot(v);
+    if c >= 1.0 / 64.0 { point + v * (eps / c) } else { point + n * eps }
 }
 
 fn valid_ray(origin: Vec3, dir: Vec3) -> bool {

@@ -269,7 +269,7 @@ fn offset_origins_never_self_intersect_at_any_scale() {
             if l.dot(n) <= 0.05 {
                 continue;
             }
-            let o = offset_origin(&g, h.triangle, p, l);
+            let o = offset_origin(&g, h.triangle, p, l, eye - p);
             assert!(!bvh.occluded(o, l, f32::INFINITY), "scale {scale}, ray {i}");
             lit += 1;
         }
@@ -295,4 +295,73 @@ fn bad_geometry_is_an_error_and_empty_geometry_hits_nothing() {
     assert_eq!(empty.triangle_count(), 0);
     assert!(empty.intersect(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY).is_none());
     assert!(!empty.occluded(Vec3::ZERO, Vec3::X, f32::INFINITY));
+}
+
+proptest! {
+    /// A camera ray lands on the shared edge of two faces that meet at a concave angle (a
+    /// room's floor and wall): the secondary rays from that point must see the two faces as a
+    /// point just inside the wedge would. A ray that leaves toward the other face's front hits
+    /// it at a small `t`; one that leaves away from it hits nothing (the scene is the two
+    /// triangles). Before the origin moved toward the viewer, rays leaving away from the
+    /// adjacent face hit it at `t ≈ 0` for a share of directions that depended on rounding.
+    #[test]
+    fn secondary_rays_from_a_shared_edge_see_it_from_the_viewer_side(
+        angle_deg in 25.0f32..155.0,
+        (yaw, pitch, roll) in (0.0f32..std::f32::consts::TAU, -1.5f32..1.5, 0.0f32..std::f32::consts::TAU),
+        log_scale in -3.0f32..4.0,
+        offset in prop::array::uniform3(-100.0f32..100.0),
+        u in 0.3f32..0.7,
+        (eye_a, eye_r) in (0.2f32..0.8, 0.1f32..0.9),
+        seed in any::<u32>(),
+    ) {
+        let scale = 10f32.powf(log_scale);
+        let rot = glam::Quat::from_euler(glam::EulerRot::YXZ, yaw, pitch, roll);
+        let place = |p: Vec3| rot * (p * scale) + Vec3::from(offset) * scale;
+        // Face A in the plane y = 0 (x ≥ 0), face B at `angle` from it about the z axis; the
+        // wedge between them (the "room") is where the viewer is.
+        let (s, c) = angle_deg.to_radians().sin_cos();
+        let b_dir = Vec3::new(c, s, 0.0);
+        let (e0, e1) = (Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        let tris = [
+            [place(e0), place(e1), place(Vec3::new(4.0, 0.0, 0.0))],
+            [place(e0), place(e1), place(b_dir * 4.0)],
+        ];
+        let g = geometry(soup("wedge", &tris, 0));
+        let bvh = Bvh::new(&g).unwrap();
+        let (n_a, n_b) = (rot * Vec3::Y, rot * Vec3::new(s, -c, 0.0));
+        // The viewer: inside the wedge, looking at the edge point.
+        let half = Vec3::X * (1.0 - eye_a) + b_dir * eye_a;
+        let target = place(Vec3::new(0.0, 0.0, 2.0 * u - 1.0));
+        let eye = place(half * (0.5 + eye_r) + Vec3::new(0.0, 0.0, 2.0 * u - 1.0));
+        let d = (target - eye).normalize();
+        let Some(h) = bvh.intersect(eye, d, 0.0, f32::INFINITY) else {
+            return Err(TestCaseError::reject("the camera ray missed the edge"));
+        };
+        let p = eye + d * h.t;
+        let (n_own, n_other) = if h.triangle == 0 { (n_a, n_b) } else { (n_b, n_a) };
+        let other = 1 - h.triangle;
+        let mut checked = 0;
+        for k in 0..64u32 {
+            let r = |dim| crate::random::rand_f32(seed, k, dim) * 2.0 - 1.0;
+            let l = Vec3::new(r(0), r(1), r(2)).normalize_or(n_own);
+            let (own, towards) = (l.dot(n_own), l.dot(n_other));
+            // Grazing directions (within ~3° of either plane) are left out: their answer is
+            // decided by the offset's size, not by its side.
+            if own < 0.05 || towards.abs() < 0.05 {
+                continue;
+            }
+            let o = offset_origin(&g, h.triangle, p, l, eye - p);
+            let hit = bvh.intersect(o, l, 0.0, f32::INFINITY);
+            if towards < 0.0 {
+                let hit = hit.expect("a ray into the adjacent face hits it");
+                prop_assert_eq!(hit.triangle, other);
+                let size = p.abs().max_element().max(4.0 * scale);
+                prop_assert!(hit.t < 1e-2 * size, "t {} at size {}", hit.t, size);
+            } else {
+                prop_assert!(hit.is_none(), "a ray leaving the wedge hit {:?} (own {own}, towards {towards})", hit);
+            }
+            checked += 1;
+        }
+        prop_assert!(checked > 10, "{checked}");
+    }
 }

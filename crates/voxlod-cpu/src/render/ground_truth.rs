@@ -132,6 +132,9 @@ pub struct GBuffer {
     pub height: u32,
     /// `width × height` texels.
     pub texels: Vec<GTexel>,
+    /// The camera's eye: every texel's point was seen from here (secondary rays from a texel
+    /// leave toward this side of the surfaces through it, [`crate::raycast::offset_origin`]).
+    pub eye: Vec3,
 }
 
 impl GBuffer {
@@ -209,7 +212,7 @@ pub fn render(
             }
         },
     );
-    Ok(GroundTruth { image, gbuffer: GBuffer { width, height, texels } })
+    Ok(GroundTruth { image, gbuffer: GBuffer { width, height, texels, eye: frame.eye } })
 }
 
 /// Checks what [`render`] checks before it renders — the options, the camera, and that
@@ -266,7 +269,7 @@ pub fn gbuffer(
             *gt = centre_texel(&tracer, &frame, Vec2::new(x as f32, y as f32), pixel, &streams);
         }
     });
-    Ok(GBuffer { width, height, texels })
+    Ok(GBuffer { width, height, texels, eye: frame.eye })
 }
 
 /// Sample index of the pixel-centre ray in the random streams (never a stratified sample).

@@ -4,7 +4,8 @@
 //! # Definitions (shared with voxlod-cone, which defines them in its `cone` and `tracer` modules)
 //! - **Directions**: `spp` cosine-distributed directions about the G-buffer's shading normal,
 //!   from the counter-based RNG ([`crate::random`]): `rand_f32(pixel, sample, key)` with two keys
-//!   derived from the seed. Rays leave from [`offset_origin`].
+//!   derived from the seed. Rays leave from [`offset_origin`], seen from the G-buffer's eye (a
+//!   point on an edge or corner gets the limit from the visible side).
 //! - **AO** `= 1 − mean f(t_hit)`, `f(t) = max(0, 1 − t/R)` ([`falloff`], the same function as
 //!   `voxlod_cone::falloff`), `t_hit` the distance of the closest hit (alpha masks and blending
 //!   honoured), a miss or a hit beyond `R` counting 0. 1: unoccluded.
@@ -114,7 +115,8 @@ pub fn ambient_occlusion(
         let mut occ = 0.0;
         for s in 0..options.spp {
             let dir = cosine_direction(t.normal, rand_f32(pixel, s, k1), rand_f32(pixel, s, k2));
-            let origin = offset_origin(geometry, t.triangle, t.position, dir);
+            let origin =
+                offset_origin(geometry, t.triangle, t.position, dir, gbuffer.eye - t.position);
             if let Some(hit) = tracer.trace(origin, dir, pixel, s, &streams) {
                 occ += falloff(hit.hit.t, r);
             }
@@ -147,7 +149,8 @@ pub fn indirect_diffuse(
         let mut sum = Vec3::ZERO;
         for s in 0..options.spp {
             let dir = cosine_direction(t.normal, rand_f32(pixel, s, k1), rand_f32(pixel, s, k2));
-            let origin = offset_origin(geometry, t.triangle, t.position, dir);
+            let origin =
+                offset_origin(geometry, t.triangle, t.position, dir, gbuffer.eye - t.position);
             if let Some(surface) = tracer.trace(origin, dir, pixel, s, &streams) {
                 sum += tracer.radiance(&surface, dir, pixel, s, &streams, lighting);
             }

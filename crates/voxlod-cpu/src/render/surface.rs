@@ -202,7 +202,8 @@ impl<'a> MeshTracer<'a> {
         let light = self.light.sample(s.position);
         let mut visibility = 1.0;
         if shadows && s.normal.dot(light.to_light) > 0.0 {
-            let origin = offset_origin(self.geometry, s.hit.triangle, s.position, light.to_light);
+            let origin =
+                offset_origin(self.geometry, s.hit.triangle, s.position, light.to_light, -dir);
             let t_max = match self.light {
                 Light::Directional { .. } => f32::INFINITY,
                 Light::Point { position, .. } => (position - origin).length(),

@@ -66,6 +66,16 @@ pub enum Section {
         /// The images.
         grid: ImageGrid,
     },
+    /// Linear float arrays (e.g. the values behind images), written as
+    /// `assets/<name>/<array name>.npy` and linked under `caption`.
+    Data {
+        /// Asset name: letters, digits, `-`, `_`; unique within the report.
+        name: String,
+        /// What the arrays hold.
+        caption: String,
+        /// The arrays (names unique within the section).
+        arrays: Vec<crate::npy::FloatArray>,
+    },
     /// A plot, written as `assets/<name>.svg`; points it could not draw are listed under it.
     Plot {
         /// Asset name: letters, digits, `-`, `_`; unique within the report.
@@ -134,6 +144,16 @@ impl Report {
         self.push(Section::Images { name: name.into(), caption: caption.into(), grid })
     }
 
+    /// Appends linear float arrays, written as `.npy` files (see [`Section::Data`]).
+    pub fn data(
+        &mut self,
+        name: impl Into<String>,
+        caption: impl Into<String>,
+        arrays: Vec<crate::npy::FloatArray>,
+    ) -> &mut Self {
+        self.push(Section::Data { name: name.into(), caption: caption.into(), arrays })
+    }
+
     /// Appends a plot.
     pub fn plot(&mut self, name: impl Into<String>, plot: Plot) -> &mut Self {
         self.push(Section::Plot { name: name.into(), plot })
@@ -178,6 +198,19 @@ impl Report {
                     );
                     summary.add_images(&heading, name, caption, grid);
                 }
+                Section::Data { name, caption, arrays } => {
+                    let mut links = Vec::new();
+                    for a in arrays {
+                        let file = format!("{name}/{}.npy", a.name);
+                        links.push(format!("[{}](assets/{file})", a.name));
+                        files.push((file, crate::npy::encode_f32(&a.shape, &a.data)?));
+                    }
+                    md += &format!(
+                        "*{}* — linear float32 arrays (`numpy.load`): {}\n",
+                        one_line(caption),
+                        links.join(" · ")
+                    );
+                }
                 Section::Plot { name, plot } => {
                     let rendered = plot.render_svg()?;
                     files.push((format!("{name}.svg"), rendered.svg.into_bytes()));
@@ -207,17 +240,30 @@ impl Report {
     }
 
     fn check_names(&self) -> Result<()> {
+        let check = |name: &String| {
+            let valid = !name.is_empty()
+                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+            if valid { Ok(()) } else { Err(Error::InvalidAssetName { name: name.clone() }) }
+        };
         let mut seen = HashSet::new();
         for section in &self.sections {
             let name = match section {
                 Section::Images { name, .. } | Section::Plot { name, .. } => name,
+                Section::Data { name, arrays, .. } => {
+                    let mut files = HashSet::new();
+                    for a in arrays {
+                        check(&a.name)?;
+                        if !files.insert(a.name.to_ascii_lowercase()) {
+                            return Err(Error::DuplicateAsset {
+                                name: format!("{name}/{}", a.name),
+                            });
+                        }
+                    }
+                    name
+                }
                 _ => continue,
             };
-            let valid = !name.is_empty()
-                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
-            if !valid {
-                return Err(Error::InvalidAssetName { name: name.clone() });
-            }
+            check(name)?;
             // Case-insensitively: some file systems would write both to one file.
             if !seen.insert(name.to_ascii_lowercase()) {
                 return Err(Error::DuplicateAsset { name: name.clone() });

@@ -171,3 +171,37 @@ fn plots_with_nothing_drawable_or_extreme_values_render_without_hanging() {
         assert_eq!(r.skipped.len(), skipped, "case {i}: {:?}", r.skipped);
     }
 }
+
+#[test]
+fn data_sections_write_npy_arrays_and_link_them() {
+    use crate::npy::{FloatArray, decode_f32};
+    let tmp = TempDir::new("data");
+    let ao = FloatArray { name: "ao".into(), shape: vec![2, 3], data: vec![0.5; 6] };
+    let rgb = FloatArray {
+        name: "rgb".into(),
+        shape: vec![1, 2, 3],
+        data: (0..6).map(|i| i as f32).collect(),
+    };
+    let mut r = Report::new("data");
+    r.data("refs", "the references", vec![ao.clone(), rgb.clone()]);
+    let written = r.write(&tmp.0).unwrap();
+    let md = fs::read_to_string(&written.markdown).unwrap();
+    assert!(
+        md.contains("[ao](assets/refs/ao.npy)") && md.contains("[rgb](assets/refs/rgb.npy)"),
+        "{md}"
+    );
+    for a in [ao, rgb] {
+        let bytes = fs::read(tmp.0.join(format!("assets/refs/{}.npy", a.name))).unwrap();
+        assert_eq!(decode_f32(&bytes).unwrap(), (a.shape, a.data));
+    }
+    // A bad or repeated array name is refused before anything is written.
+    let bad = FloatArray { name: "a b".into(), shape: vec![1], data: vec![0.0] };
+    let mut r = Report::new("bad");
+    r.data("refs", "x", vec![bad]);
+    assert!(matches!(r.write(&tmp.0.join("bad")), Err(Error::InvalidAssetName { .. })));
+    assert!(!tmp.0.join("bad").exists());
+    let one = FloatArray { name: "x".into(), shape: vec![1], data: vec![0.0] };
+    let mut r = Report::new("dup");
+    r.data("refs", "x", vec![one.clone(), one]);
+    assert!(matches!(r.write(&tmp.0.join("dup")), Err(Error::DuplicateAsset { .. })));
+}

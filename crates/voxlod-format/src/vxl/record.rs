@@ -8,7 +8,7 @@
 /// payload of another type. Records are stored field by field in little-endian order, whatever
 /// the host: [`VxlRecord::FIELD_WIDTHS`] says how wide each scalar field is.
 ///
-/// Implementing it for a record of a later issue (a `#[repr(C)]` Pod struct):
+/// Implementing it for a record of your own (a `#[repr(C)]` Pod struct):
 /// ```
 /// use voxlod_format::vxl::VxlRecord;
 /// #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

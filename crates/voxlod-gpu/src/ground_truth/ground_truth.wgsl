@@ -88,18 +88,26 @@ fn ray_dir(p: vec2<f32>) -> vec3<f32> {
     return normalize_or_zero(params.forward.xyz + params.right.xyz * ndc_x + params.up.xyz * ndc_y);
 }
 
-// voxlod-cpu's raycast::offset_origin.
-fn offset_origin(t: ShadeTri, point: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+// voxlod-cpu's raycast::offset_origin: back along the ray that found `point` to `eps` above the
+// triangle's plane (off every face through `point`), or along the normal when seen grazing.
+fn offset_origin(t: ShadeTri, point: vec3<f32>, dir: vec3<f32>, to_viewer: vec3<f32>) -> vec3<f32> {
     let a = t.p0.xyz;
     let b = t.p1.xyz;
     let c = t.p2.xyz;
     let m = max(max(abs(a), abs(b)), abs(c));
     let eps = max(max(m.x, m.y), m.z) * (1.0 / 65536.0);
-    let n = normalize_or_zero(cross(b - a, c - a));
+    var n = normalize_or_zero(cross(b - a, c - a));
     if all(n == vec3<f32>(0.0)) {
-        return point + normalize_or_zero(dir) * eps;
+        n = normalize_or_zero(dir);
+    } else {
+        n = select(-n, n, dot(n, dir) >= 0.0);
     }
-    return point + select(-n, n, dot(n, dir) >= 0.0) * eps;
+    let v = normalize_or_zero(to_viewer);
+    let cos_v = dot(n, v);
+    if cos_v >= 1.0 / 64.0 {
+        return point + v * (eps / cos_v);
+    }
+    return point + n * eps;
 }
 
 struct Surface {
@@ -280,7 +288,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             light = light_at(sp.position);
             // One shadow ray (surface.rs `radiance`), from the offset origin.
             if (params.size.w & 1u) != 0u && dot(normal, light.to_light) > 0.0 {
-                origin = offset_origin(shade_tris[h.triangle], sp.position, light.to_light);
+                origin = offset_origin(shade_tris[h.triangle], sp.position, light.to_light, -dir);
                 shadow_t_max = F32_MAX;
                 if (params.size.w & 2u) != 0u {
                     shadow_t_max = length(params.light_a.xyz - origin);

@@ -277,7 +277,7 @@ impl<'a> GroundTruthKernel<'a> {
         }
         Ok(GroundTruth {
             image: Image { width, height, pixels },
-            gbuffer: GBuffer { width, height, texels },
+            gbuffer: GBuffer { width, height, texels, eye: frame.eye },
         })
     }
 }

@@ -1,6 +1,6 @@
-//! The first CPU build (sort-based closure, per-node links from a scan of the parents' child
-//! pointers), kept unchanged as the reference the fast build in [`super`] is tested against
-//! (`tests::fast_build_equals_the_reference`). Test builds only.
+//! A straightforward CPU build (sort-based closure, per-node links from a scan of the parents'
+//! child pointers): the reference the linear build in [`super`] is tested against
+//! (the `tests::fast_build` module). Test builds only.
 
 use glam::UVec3;
 use rayon::prelude::*;

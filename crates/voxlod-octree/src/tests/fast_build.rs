@@ -1,6 +1,6 @@
-//! The linear top-down build (`build.rs`) against the first, sort-based build kept in
+//! The linear top-down build (`build.rs`) against the straightforward sort-based build of
 //! `build::reference`: identical octrees (every array of every level, bit for bit) and the same
-//! errors. The reference is the straightforward build the fast one replaced.
+//! errors.
 
 use glam::UVec3;
 use proptest::prelude::*;

@@ -1,5 +1,5 @@
-//! The sampler of `sample.rs` against the plain formulation it replaced (`oracle` below, the
-//! code as it was before the floor, bounds, weight and Morton shortcuts), **bit for bit**: the
+//! The sampler of `sample.rs` against the plain formulation (`oracle` below: the same arithmetic
+//! without the floor, bounds, weight and Morton shortcuts), **bit for bit**: the
 //! GPU cone kernel's equivalence suite and the published cone figures rely on sampling never
 //! changing. Random octrees (dense and sparse levels, non-power-of-two grids, virtual depth
 //! above the grid, isotropic and `Directional` payloads) and random positions and levels,
@@ -197,7 +197,7 @@ fn positions() -> impl Strategy<Value = Vec<(Vec3, Vec<f32>)>> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// Averages payloads: the new sampler equals the old one bit for bit.
+    /// Averages payloads: the sampler equals the plain formulation bit for bit.
     #[test]
     fn sampling_is_bit_identical_to_the_plain_formulation(
         (dims, coords, dense, extra) in scene(),

@@ -37,7 +37,7 @@ pub use presets::{CloudParams, ExplosionParams, SmokeParams, cloud_bank, explosi
 use crate::procedural::rng::sin_cos_turns;
 use crate::{Error, Result};
 
-/// Most particles a generator makes (the 10⁵).
+/// Most particles a generator makes: 10⁵.
 pub const MAX_PARTICLES: usize = 100_000;
 
 /// How a particle's colour varies inside it (the `color_mode` field).

@@ -7,8 +7,8 @@
 //! Pipeline: conservative voxelization at [`LodConfig::resolution`] → Averages records (32 rays
 //! per voxel) → octree → [`PrimaryRenderer::render`] with voxlod-cpu's `shade()` (the scene's
 //! light, ambient 0.1 as the ground truth here, no specular: Averages carry none) → compared
-//! with `ground_truth::render` ([`LodConfig::spp`] rays per pixel; a second seed gives its own
-//! noise).
+//! with `ground_truth::render` ([`LodConfig::spp`] rays per pixel; a second seed estimates its
+//! own error as half the MSE between the two).
 
 use std::time::Instant;
 
@@ -164,8 +164,10 @@ pub struct LodResult {
     pub truth_spp: u32,
     /// Ground-truth render time, ms.
     pub truth_ms: f64,
-    /// The ground truth's own noise: MSE between seeds 0 and 1.
-    pub truth_noise_mse: f64,
+    /// MSE between two independent seeds (0 and 1) of the ground truth.
+    pub truth_seed_mse: f64,
+    /// The ground truth's own error, estimated as half of `truth_seed_mse`.
+    pub truth_error_mse: f64,
     /// Octree build times.
     pub build: BuildTimes,
     /// One row per opacity pre-filter and bias.
@@ -209,7 +211,7 @@ pub fn run(config: &LodConfig, say: &dyn Fn(&str)) -> Result<LodResult, Error> {
     let truth_ms = ms(t);
     let truth_img = truth.image.to_srgb8();
     let noise = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt_options(1))?;
-    let truth_noise_mse = voxlod_eval::mse(&noise.image.to_srgb8(), &truth_img)?;
+    let truth_seed_mse = voxlod_eval::mse(&noise.image.to_srgb8(), &truth_img)?;
 
     say(&format!("{}: voxelizing and building the octree at {}³", config.scene, config.resolution));
     let (lo, hi) = scene.bounds()?;
@@ -300,7 +302,8 @@ pub fn run(config: &LodConfig, say: &dyn Fn(&str)) -> Result<LodResult, Error> {
         footprint: FootprintRange { nearest_voxels, farthest_voxels },
         truth_spp: config.spp,
         truth_ms,
-        truth_noise_mse,
+        truth_seed_mse,
+        truth_error_mse: truth_seed_mse / 2.0,
         build,
         rows,
         images,
@@ -404,7 +407,8 @@ impl LodResult {
          default camera: the pixel footprint (bias 1) spans {:.2}–{:.2} voxels from the nearest \
          to the farthest corner of the scene's bounds. Bias 0 reads level 0 everywhere (the \
          finest-level march); bias b reads level log2(max(b·footprint, 1)). Ground truth: the \
-         mesh at {} rays per pixel ({:.0} ms; its own noise, MSE between two seeds: {:.1e}). \
+         mesh at {} rays per pixel ({:.0} ms; its own error, half the MSE between two seeds: \
+         {:.1e}). \
          Times are CPU times on a shared machine.",
             o.scene,
             o.resolution,
@@ -416,7 +420,7 @@ impl LodResult {
             o.footprint.farthest_voxels,
             o.truth_spp,
             o.truth_ms,
-            o.truth_noise_mse
+            o.truth_error_mse
         )
     }
 

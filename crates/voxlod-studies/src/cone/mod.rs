@@ -1,5 +1,5 @@
-//! Voxel cone tracing on the sparse voxel octree (the cone tracing of the voxel-transformation
-//! SVO paper, §4.5, after Crassin et al. 2011), measured against ray-traced references on the
+//! Voxel cone tracing on the sparse voxel octree (Yalçıner and Sahillioğlu 2020, §4.5, after
+//! Crassin et al. 2011), measured against ray-traced references on the
 //! mesh: AO and one-bounce diffuse indirect light over cone count × aperture × octree depth ×
 //! step, both opacity pre-filters; the light-leaking experiment (a wall of known thickness
 //! between a lit floor and a receiver); and ([`lod`]) primary visibility with level of detail
@@ -10,7 +10,7 @@
 //! (shadows marched in the octree) into an isotropic and a directional radiance octree → per
 //! option set and octree, AO and `albedo · E/π` from the pixel-centre G-buffer → MSE and SSIM
 //! against the references (`voxlod_cpu::render::indirect`, [`ConeConfig::spp`] rays, seed 0;
-//! seed 1 measures the references' own noise).
+//! a second seed estimates the references' own error: half the MSE between the two seeds).
 //!
 //! On [`Backend::Gpu`] the sweep's cones are traced by voxlod-gpu's cone kernel (the same AO
 //! and `E/π` per pixel as the CPU's `ConeTracer::ao_and_diffuse`, checked by the equivalence
@@ -33,7 +33,11 @@ use voxlod_cpu::raycast::Bvh;
 use voxlod_cpu::render::ground_truth::{self, GBuffer};
 use voxlod_cpu::render::indirect;
 use voxlod_cpu::voxelize;
-use voxlod_eval::report::{Cell, Column, NumberFormat, Plot, Report, Series, Table};
+use voxlod_eval::error_heatmap;
+use voxlod_eval::npy::FloatArray;
+use voxlod_eval::report::{
+    Cell, Column, ImageGrid, LabeledImage, NumberFormat, Plot, Report, Series, Table,
+};
 use voxlod_format::GridSpec;
 use voxlod_gpu::cone::{ConeKernel, ConeQuery, GpuConeOctree, GpuMedium, ShadingPoint};
 use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree};
@@ -214,8 +218,12 @@ pub struct ConeResult {
     pub scene: String,
     /// Where the sweep's cones were traced: `cpu (rayon)` or `gpu: <adapter>`.
     pub backend: String,
-    /// The references' own noise: MSE between seeds 0 and 1 (8-bit sRGB).
-    pub reference_noise_mse: AoIndirect,
+    /// MSE between two independent seeds (0 and 1) of each reference (8-bit sRGB).
+    pub reference_seed_mse: AoIndirect,
+    /// Each reference's own error against the converged truth, estimated as half of
+    /// [`ConeResult::reference_seed_mse`] (independent seeds: the MSE between two estimates is
+    /// the sum of their variances). Errors below it are not resolved.
+    pub reference_error_mse: AoIndirect,
     /// Reference render times, ms (CPU).
     pub reference_ms: AoIndirect,
     /// One octree per resolution.
@@ -226,6 +234,47 @@ pub struct ConeResult {
     pub leaks: Vec<LeakRow>,
     /// Primary visibility with level of detail by distance (None when not configured).
     pub lod: Option<LodResult>,
+    /// The sweep's rows with the lowest AO and indirect MSE (resolution, opacity, cones ×
+    /// aperture, step), whose images the report shows.
+    pub best_rows: BestRows,
+    /// The references and the best rows' images, for the report (not serialized).
+    #[serde(skip)]
+    pub images: Vec<LabeledImage>,
+    /// The same in linear float (AO, and `albedo · E/π` as RGB), written as `.npy` by the
+    /// report (not serialized).
+    #[serde(skip)]
+    pub arrays: Vec<FloatArray>,
+}
+
+/// Which rows of the sweep scored best, by label.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BestRows {
+    /// Lowest AO MSE.
+    pub ao: Option<String>,
+    /// Lowest indirect MSE.
+    pub indirect: Option<String>,
+}
+
+/// One cone-traced image of the sweep, per pixel: AO, and `E/π` (before the albedo).
+struct Traced {
+    ao: Vec<f32>,
+    irradiance: Vec<Vec3>,
+}
+
+/// The best row of the sweep for one target so far: its MSE, label and image.
+struct Best {
+    mse: f64,
+    label: String,
+    traced: Traced,
+}
+
+impl Best {
+    fn keep(best: &mut Option<Best>, mse: f64, label: impl Fn() -> String, traced: &Traced) {
+        if best.as_ref().is_none_or(|b| mse < b.mse) {
+            let traced = Traced { ao: traced.ao.clone(), irradiance: traced.irradiance.clone() };
+            *best = Some(Best { mse, label: label(), traced });
+        }
+    }
 }
 
 fn gray(gb: &GBuffer, v: &[f32]) -> Srgb8Image {
@@ -289,6 +338,7 @@ pub fn run(
     let light = crate::scenes::cone_light(scene.light());
     let mut rows = Vec::new();
     let mut octrees = Vec::new();
+    let (mut best_ao, mut best_indirect) = (None, None);
     for &res in &args.resolutions {
         say(&format!("voxelizing and building the octree at {res}³"));
         let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), res)?;
@@ -335,11 +385,15 @@ pub fn run(
                                 .as_ref()
                                 .map(|(k, iso, dir)| (*k, if directional { dir } else { iso }))
                         };
-                        let row = if opacity == "isotropic" {
+                        let (row, traced) = if opacity == "isotropic" {
                             measure(&args.scene, &radiance, on(false), o, &refs)?
                         } else {
                             measure(&args.scene, &directional, on(true), o, &refs)?
                         };
+                        let label =
+                            || format!("{res}³ {opacity}, {cones} × {aperture}°, step {step}");
+                        Best::keep(&mut best_ao, row.ao_mse, label, &traced);
+                        Best::keep(&mut best_indirect, row.indirect_mse, label, &traced);
                         rows.push(ConeRow { resolution: res, opacity: opacity.into(), ..row });
                     }
                 }
@@ -349,16 +403,71 @@ pub fn run(
     say("light leaking");
     let leaks = leak_experiment(&[5, 6, 7], &args.steps)?;
     let lod = args.lod.as_ref().map(|l| lod::run(l, say)).transpose()?;
+    let best_rows = BestRows {
+        ao: best_ao.as_ref().map(|b: &Best| b.label.clone()),
+        indirect: best_indirect.as_ref().map(|b: &Best| b.label.clone()),
+    };
+    let (images, arrays) = reference_outputs(&gb, &ao_ref, &ind_ref, best_ao, best_indirect)?;
     Ok(ConeResult {
         scene: args.scene.clone(),
         backend: backend_name,
-        reference_noise_mse: noise,
+        reference_seed_mse: noise,
+        reference_error_mse: AoIndirect { ao: noise.ao / 2.0, indirect: noise.indirect / 2.0 },
         reference_ms: AoIndirect { ao: ao_ms, indirect: ind_ms },
         octrees,
         rows,
         leaks,
         lod,
+        best_rows,
+        images,
+        arrays,
     })
+}
+
+/// The references, the best AO row's and the best indirect row's images with their per-pixel
+/// error heat maps (8-bit sRGB), and the same in linear float: AO as `[height, width]`,
+/// `albedo · E/π` as `[height, width, 3]`.
+fn reference_outputs(
+    gb: &GBuffer,
+    ao_ref: &[f32],
+    ind_ref: &[Vec3],
+    best_ao: Option<Best>,
+    best_indirect: Option<Best>,
+) -> Result<(Vec<LabeledImage>, Vec<FloatArray>), Error> {
+    let (w, h) = (gb.width as usize, gb.height as usize);
+    let outgoing = |e: &[Vec3]| -> Vec<f32> {
+        e.iter().zip(&gb.texels).flat_map(|(e, t)| (t.albedo * *e).to_array()).collect()
+    };
+    let gray_array = |name: &str, v: &[f32]| FloatArray {
+        name: name.into(),
+        shape: vec![h, w],
+        data: v.to_vec(),
+    };
+    let rgb_array = |name: &str, e: &[Vec3]| FloatArray {
+        name: name.into(),
+        shape: vec![h, w, 3],
+        data: outgoing(e),
+    };
+    let (ao_img, ind_img) = (gray(gb, ao_ref), colour(gb, ind_ref));
+    // Labels stay short (they are drawn inside images as small as 16 px); the caption names
+    // the rows.
+    let mut images = vec![LabeledImage::new("AO ref", ao_img.clone())];
+    let mut arrays = vec![gray_array("ao_reference", ao_ref)];
+    if let Some(b) = best_ao {
+        let img = gray(gb, &b.traced.ao);
+        images.push(LabeledImage::new("AO best", img.clone()));
+        images.push(LabeledImage::new("AO err", error_heatmap(&img, &ao_img, 0.25)?));
+        arrays.push(gray_array("ao_best", &b.traced.ao));
+    }
+    images.push(LabeledImage::new("ind ref", ind_img.clone()));
+    arrays.push(rgb_array("indirect_reference", ind_ref));
+    if let Some(b) = best_indirect {
+        let img = colour(gb, &b.traced.irradiance);
+        images.push(LabeledImage::new("ind best", img.clone()));
+        images.push(LabeledImage::new("ind err", error_heatmap(&img, &ind_img, 0.25)?));
+        arrays.push(rgb_array("indirect_best", &b.traced.irradiance));
+    }
+    Ok((images, arrays))
 }
 
 /// The two opacity pre-filters measured: the mean of the eight children (one opacity) and six
@@ -382,7 +491,7 @@ fn measure<M: ConeMedium + GpuMedium + Sync>(
     gpu: Option<(&ConeKernel, &GpuConeOctree)>,
     o: TraceOptions,
     refs: &References,
-) -> Result<ConeRow, Error> {
+) -> Result<(ConeRow, Traced), Error> {
     let (cones, aperture, step) = (o.diffuse_cones, o.diffuse_aperture_deg, o.step_factor);
     let gb = refs.gb;
     let tracer = ConeTracer::new(radiance, o)?;
@@ -433,7 +542,7 @@ fn measure<M: ConeMedium + GpuMedium + Sync>(
     }
     let ma = voxlod_eval::compare(&gray(gb, &ao), refs.ao)?;
     let mi = voxlod_eval::compare(&colour(gb, &e), refs.indirect)?;
-    Ok(ConeRow {
+    let row = ConeRow {
         resolution: 0,
         opacity: String::new(),
         depth: radiance.depth(),
@@ -446,7 +555,8 @@ fn measure<M: ConeMedium + GpuMedium + Sync>(
         indirect_ssim: mi.ssim,
         trace_ms,
         steps_per_pixel: steps as f64 / gb.texels.len() as f64,
-    })
+    };
+    Ok((row, Traced { ao, irradiance: e }))
 }
 
 /// The wall scene over the unit cube at `2^depth` voxels: a floor (y = 0 layer) on `x < ½`,
@@ -587,14 +697,15 @@ impl ConeResult {
         r.heading(2, format!("Voxel cone tracing: {}", o.scene));
         r.text(format!(
         "References: ray-traced AO and one-bounce path-traced diffuse indirect light on the mesh \
-         ({:.0} ms and {:.0} ms, CPU). Their own noise (MSE between seeds 0 and 1): AO {:.5}, \
-         indirect {:.4}; errors below these are not resolved. Octrees (res, voxels, bytes/voxel, \
+         ({:.0} ms and {:.0} ms, CPU). Their own error against the converged truth, estimated \
+         as half the MSE between two independent seeds: AO {:.2e}, indirect {:.2e}; errors \
+         below these are not resolved. Octrees (res, voxels, bytes/voxel, \
          build ms, injection ms): {}. Cones traced on {}. Times are wall-clock times on a \
          shared machine (on a CPU adapter such as lavapipe, CPU times of the GPU path).",
         o.reference_ms.ao,
         o.reference_ms.indirect,
-        o.reference_noise_mse.ao,
-        o.reference_noise_mse.indirect,
+        o.reference_error_mse.ao,
+        o.reference_error_mse.indirect,
         o.octrees
             .iter()
             .map(|t| format!(
@@ -607,6 +718,24 @@ impl ConeResult {
     ));
         for t in o.tables()? {
             r.table(t);
+        }
+        if !o.images.is_empty() {
+            r.images(
+                "cone_references",
+                format!(
+                    "the ray-traced references, the sweep's best AO row ({}) and best indirect \
+                     row ({}), and their per-pixel errors (heat maps: full scale 0.25)",
+                    o.best_rows.ao.as_deref().unwrap_or("none"),
+                    o.best_rows.indirect.as_deref().unwrap_or("none")
+                ),
+                ImageGrid::new(3, o.images.clone()),
+            );
+            r.data(
+                "cone_reference_data",
+                "the same images in linear float: AO [height, width]; albedo · E/π [height, \
+                 width, 3]",
+                o.arrays.clone(),
+            );
         }
         if let Some(p) = &o.lod {
             r.text(p.summary());
