@@ -337,8 +337,8 @@ fn run_scene(
         let truth = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt(0))?;
         let truth_ms = ms(t);
         let truth8 = truth.image.to_srgb8();
-        let noise = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt(1))?;
-        let truth_noise_mse = voxlod_eval::mse(&noise.image.to_srgb8(), &truth8)?;
+        let second = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt(1))?;
+        let truth_seed_mse = voxlod_eval::mse(&second.image.to_srgb8(), &truth8)?;
         let cam = pinhole(&camera, size);
         let probe = DifferentialRenderer::new(&micro, cam, frame.light, Default::default())?;
         let footprint_voxels =
@@ -401,7 +401,8 @@ fn run_scene(
             edge_pixels,
             covered_pixels: covered,
             truth_ms,
-            truth_noise_mse,
+            truth_seed_mse,
+            truth_error_mse: truth_seed_mse / 2.0,
             rows,
             grazing,
         });

@@ -24,7 +24,8 @@
 //!   own specular lobe (the unfiltered BRDF on the mean normal, as the paper's naive method).
 //!
 //! # Measures
-//! - MSE and SSIM against the ground truth (8-bit sRGB), and the ground truth's own noise.
+//! - MSE and SSIM against the ground truth (8-bit sRGB), and the ground truth's own error (half
+//!   the MSE between two seeds).
 //! - **Silhouette thickness**: `(Σα − Σα_truth) / n_edge` pixels, `α` the coverage, `n_edge`
 //!   the pixels the truth covers partly (`0.05 ≤ α ≤ 0.95`): by how many pixels the silhouette
 //!   grows (> 0) or shrinks; and the coverage excess `(Σα − Σα_truth)/Σα_truth`.
@@ -246,10 +247,13 @@ pub struct MethodRow {
     /// the paper's cost per covered pixel.
     pub cpu_us_per_covered_pixel: f64,
     /// On the GPU backend (masks only): the kernel's time, min and max over the repeats.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu: Option<TimeRange>,
     /// On the GPU backend: the kernel's time per covered pixel, microseconds (the minimum).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_us_per_covered_pixel: Option<f64>,
     /// On the GPU backend: largest difference from the CPU image, 8-bit sRGB steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_worst_step: Option<u8>,
 }
 
@@ -281,8 +285,11 @@ pub struct ZoomResult {
     pub covered_pixels: f64,
     /// Ground-truth render time, ms (CPU).
     pub truth_ms: f64,
-    /// MSE between two ground truths of different seeds (their noise).
-    pub truth_noise_mse: f64,
+    /// MSE between two ground truths of different seeds.
+    pub truth_seed_mse: f64,
+    /// The ground truth's own error against the converged image, estimated as half
+    /// [`Self::truth_seed_mse`]: MSE differences below it are not resolved.
+    pub truth_error_mse: f64,
     /// One row per method.
     pub rows: Vec<MethodRow>,
     /// Grazing-colour bins (radial scenes only).

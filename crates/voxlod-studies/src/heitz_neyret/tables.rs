@@ -27,6 +27,7 @@ impl HeitzNeyretResult {
             Column::text("scene"),
             num("zoom", NumberFormat::Fixed(0)),
             num("voxels/px", NumberFormat::Significant(2)),
+            num("truth error MSE", NumberFormat::Significant(2)),
             Column::text("method"),
             num("MSE", NumberFormat::Significant(3)),
             num("SSIM", NumberFormat::Fixed(3)),
@@ -60,6 +61,7 @@ impl HeitzNeyretResult {
                         Cell::Text(label.clone()),
                         Cell::Number(z.zoom as f64),
                         Cell::Number(z.footprint_voxels as f64),
+                        Cell::Number(z.truth_error_mse),
                         Cell::Text(r.method.label().into()),
                         Cell::Number(r.mse),
                         Cell::Number(r.ssim),
@@ -205,7 +207,8 @@ impl HeitzNeyretResult {
              column, where present, is the wgpu kernel's time, which on a CPU adapter \
              (lavapipe) is a CPU time of the GPU path. Silhouette px: by how many pixels the \
              silhouette is thicker (> 0) than the truth's; coverage excess: the total coverage \
-             over the truth's.",
+             over the truth's. Truth error MSE: the ground truth's own error, half the MSE \
+             between two of its seeds; MSE differences below it are not resolved.",
             self.rays, self.image_size, self.spp, self.backend, self.machine
         ));
         for t in self.tables()? {
