@@ -53,8 +53,7 @@ fn footprint_grows_linearly_with_distance() {
         assert!((r.footprint_voxels(t) - t * per_voxel).abs() <= 1e-6 * t, "{t}");
         assert!((r.footprint_voxels(3.0 * t) - 3.0 * r.footprint_voxels(t)).abs() < 1e-5 * t);
     }
-    let r2 =
-        PrimaryRenderer::new(&tree, camera(0.0, 60.0, 100), LIGHT, with_bias(2.0)).unwrap();
+    let r2 = PrimaryRenderer::new(&tree, camera(0.0, 60.0, 100), LIGHT, with_bias(2.0)).unwrap();
     assert!((r2.footprint_voxels(50.0) - 2.0 * r.footprint_voxels(50.0)).abs() < 1e-5);
     // The cone's aperture gives the same diameter: d(t) = 2·t·tan(θ/2).
     assert!((2.0 * 50.0 * (0.5 * r.aperture()).tan() - r.footprint_voxels(50.0)).abs() < 1e-4);
@@ -66,16 +65,13 @@ fn diameters_below_one_voxel_give_the_finest_march_exactly() {
     // Eye 20 voxels in front of the cube: every distance in the cube is below 150 voxels,
     // and 150 · 1e-3 · 2·tan(30°)/16 ≈ 0.01 voxel.
     let cam = camera(-20.0, 60.0, 16);
-    let fine =
-        PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
-    let tiny =
-        PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(1e-3)).unwrap().render(&lambert);
+    let fine = PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
+    let tiny = PrimaryRenderer::new(&tree, cam, LIGHT, with_bias(1e-3)).unwrap().render(&lambert);
     assert_eq!(fine, tiny);
     assert!(fine.pixels.iter().any(|p| p.w > 0.9 && p.x > 0.5), "the wall is lit and seen");
     // From far away the pixel footprint spans many voxels: fewer samples than level 0.
     let far = camera(-1500.0, 3.0, 16);
-    let fine =
-        PrimaryRenderer::new(&tree, far, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
+    let fine = PrimaryRenderer::new(&tree, far, LIGHT, with_bias(0.0)).unwrap().render(&lambert);
     let lod = PrimaryRenderer::new(&tree, far, LIGHT, with_bias(1.0)).unwrap().render(&lambert);
     assert!(lod.samples * 2 < fine.samples, "{} vs {}", lod.samples, fine.samples);
     assert_ne!(fine.pixels, lod.pixels);
@@ -123,8 +119,8 @@ fn the_level_sampled_where_the_footprint_spans_2_to_the_k_voxels_is_k() {
             PrimaryRenderer::new(&tree, camera(0.0, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
         let d = probe.distance_for_footprint((1u32 << k) as f32).unwrap();
         // The wall's face (z = 40) at distance d from the eye, on the centre pixel's ray.
-        let r = PrimaryRenderer::new(&tree, camera(40.0 - d, 20.0, 63), LIGHT, with_bias(1.0))
-            .unwrap();
+        let r =
+            PrimaryRenderer::new(&tree, camera(40.0 - d, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
         let seen = Mutex::new(Vec::new());
         let px = r.pixel(31, 31, &|s: &ShadeInput| {
             seen.lock().unwrap().push((s.distance_voxels, s.level, s.diameter));
@@ -195,14 +191,10 @@ fn directional_opacities_keep_a_thin_wall_opaque_at_coarse_levels() {
         (0..64).flat_map(|y| (0..64).map(move |x| (UVec3::new(x, y, 40), leaf))).collect();
     let o = BuildOptions { depth: None, dense_log2: 3 };
     let iso = Octree::build(grid, voxels.clone(), &o).unwrap();
-    let dir: Octree<Directional<AveragePayload>> = Octree::build(
-        grid,
-        voxels.into_iter().map(|(c, p)| (c, Directional::isotropic(p))),
-        &o,
-    )
-    .unwrap();
-    let probe =
-        PrimaryRenderer::new(&iso, camera(0.0, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
+    let dir: Octree<Directional<AveragePayload>> =
+        Octree::build(grid, voxels.into_iter().map(|(c, p)| (c, Directional::isotropic(p))), &o)
+            .unwrap();
+    let probe = PrimaryRenderer::new(&iso, camera(0.0, 20.0, 63), LIGHT, with_bias(1.0)).unwrap();
     let d = probe.distance_for_footprint(8.0).unwrap();
     let cam = camera(40.0 - d, 20.0, 63);
     let a = PrimaryRenderer::new(&iso, cam, LIGHT, with_bias(1.0)).unwrap();

@@ -50,8 +50,7 @@ fn exp_neg_is_within_three_ulp_of_libm() {
     let mut worst = 0.0f64;
     for i in 0..200_000u32 {
         // Dense over [0, 40], then sparse up to the cut-off.
-        let x =
-            if i < 160_000 { i as f64 * 2.5e-4 } else { 40.0 + (i - 160_000) as f64 * 0.0167 };
+        let x = if i < 160_000 { i as f64 * 2.5e-4 } else { 40.0 + (i - 160_000) as f64 * 0.0167 };
         let (got, want) = (exp_neg(x), (-x).exp());
         let ulp = f64::from_bits(want.to_bits() + 1) - want;
         worst = worst.max((got - want).abs() / ulp);

@@ -81,11 +81,8 @@ fn vndf_samples_are_visible_and_follow_the_vndf() {
         let t = (i as f64 + 0.5) * dt;
         for j in 0..np {
             let p = (j as f64 + 0.5) * dp;
-            let w = Vec3::new(
-                (t.sin() * p.cos()) as f32,
-                (t.sin() * p.sin()) as f32,
-                t.cos() as f32,
-            );
+            let w =
+                Vec3::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
             let d = ndf(s, w) as f64 * w.dot(wi).max(0.0) as f64 / sigma;
             expected[bin(w)] += d * t.sin() * dt * dp;
         }
@@ -129,8 +126,8 @@ fn all_equal_normals_give_a_finite_positive_definite_fit() {
     let s = fit.matrix();
     assert!(s.is_finite() && s.determinant() > 0.0, "{s}");
     // Heitz's surface-like matrix n nᵀ + 0.01 (I − n nᵀ).
-    let heitz = Mat3::from_cols(n * n.x, n * n.y, n * n.z) * 0.99
-        + Mat3::from_diagonal(Vec3::splat(0.01));
+    let heitz =
+        Mat3::from_cols(n * n.x, n * n.y, n * n.z) * 0.99 + Mat3::from_diagonal(Vec3::splat(0.01));
     assert!((s - heitz).abs().to_cols_array().iter().all(|d| *d < 1e-6), "{s} vs {heitz}");
     let t = fit.semi_axes();
     let pi = std::f64::consts::PI;
@@ -194,8 +191,7 @@ fn flat_surface_shading_matches_lambert() {
     // value of its normal.
     let n = Vec3::Z;
     let s = estimate(&[n; 8]).unwrap().matrix();
-    let m =
-        MaterialSample { albedo: Vec3::ONE, alpha: 1.0, specular: Vec3::ZERO, shininess: 1.0 };
+    let m = MaterialSample { albedo: Vec3::ONE, alpha: 1.0, specular: Vec3::ZERO, shininess: 1.0 };
     let light =
         LightSample { to_light: Vec3::Z, distance: f32::INFINITY, irradiance: Vec3::splat(PI) };
     let r = shade_record(s, &m, Vec3::Z, &light, 1.0, Vec3::ZERO);

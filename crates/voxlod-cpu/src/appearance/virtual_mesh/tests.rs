@@ -155,8 +155,7 @@ fn extremal_normals_lie_on_the_cone_120_degrees_apart() {
         .as_dvec3()
         .normalize();
         let ns = extremal_normals(axis, theta);
-        let proj: Vec<DVec3> =
-            ns.iter().map(|n| (*n - axis * n.dot(axis)).normalize()).collect();
+        let proj: Vec<DVec3> = ns.iter().map(|n| (*n - axis * n.dot(axis)).normalize()).collect();
         for j in 0..3 {
             assert!((ns[j].length() - 1.0).abs() < 1e-12);
             assert!((ns[j].dot(axis).acos() - theta).abs() < 1e-9, "θ {theta}");
@@ -341,10 +340,7 @@ fn grid_wrapper_selects_the_opacity_rule() {
     g.rule = DirectionalRule::Circles;
     let circles = alpha(&g, Vec3::X);
     assert!(face_on >= 0.99, "{face_on}");
-    assert_eq!(
-        lines,
-        subgrid::directional_opacity(&rec.opacity, Vec3::X, DirectionalRule::Lines)
-    );
+    assert_eq!(lines, subgrid::directional_opacity(&rec.opacity, Vec3::X, DirectionalRule::Lines));
     assert_eq!(
         circles,
         subgrid::directional_opacity(&rec.opacity, Vec3::X, DirectionalRule::Circles)
