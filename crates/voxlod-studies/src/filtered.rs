@@ -60,6 +60,36 @@ impl FilteredConfig {
     pub fn full() -> Self {
         Self { resolutions: vec![128, 256], higher_image: Some(512), ..Self::quick() }
     }
+
+    /// Checks every field (named in the error).
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, value: String, expected: &'static str| {
+            Err(Error::InvalidConfig { study: "filtered appearance", field, value, expected })
+        };
+        if self.resolutions.is_empty() {
+            return bad("resolutions", "[]".into(), "at least one resolution");
+        }
+        for &r in &self.resolutions {
+            if !(2..=2048).contains(&r) {
+                return bad("resolutions", r.to_string(), "in 2..=2048");
+            }
+        }
+        if let Some(h) = self.higher_image.filter(|h| !(1..=4096).contains(h)) {
+            return bad("higher_image", h.to_string(), "an image side in 1..=4096");
+        }
+        if self.rays == 0 {
+            return bad("rays", "0".into(), "at least 1 sampling ray per voxel");
+        }
+        if self.heldout == 0 {
+            return bad("heldout", "0".into(), "at least 1 held-out ray per voxel");
+        }
+        for &t in &self.thresholds {
+            if !(t.is_finite() && t >= 0.0) {
+                return bad("thresholds", t.to_string(), "finite and >= 0");
+            }
+        }
+        Ok(())
+    }
 }
 
 /// One representation at one resolution and image size.

@@ -115,6 +115,47 @@ impl Config {
             ..Self::quick()
         }
     }
+
+    /// Checks every field, and the filtered, volume and cone settings it carries (the first
+    /// bad field is named in the error), before anything runs.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, value: String, expected: &'static str| {
+            Err(Error::InvalidConfig { study: "report", field, value, expected })
+        };
+        if self.scenes.is_empty() {
+            return bad("scenes", "[]".into(), "at least one scene");
+        }
+        if self.resolutions.is_empty() {
+            return bad("resolutions", "[]".into(), "at least one resolution");
+        }
+        for &r in &self.resolutions {
+            if !(1..=2048).contains(&r) {
+                return bad("resolutions", r.to_string(), "in 1..=2048");
+            }
+        }
+        if !(1..=4096).contains(&self.image_size) {
+            return bad("image_size", self.image_size.to_string(), "an image side in 1..=4096");
+        }
+        if self.gt_spp == 0 {
+            return bad("gt_spp", "0".into(), "at least 1 ray per pixel");
+        }
+        if self.views == 0 {
+            return bad("views", "0".into(), "at least 1 view");
+        }
+        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+            return bad("ambient", format!("{}", self.ambient), "finite and >= 0 per channel");
+        }
+        if let Some(f) = &self.filtered {
+            f.validate()?;
+        }
+        if let Some(v) = &self.volume {
+            v.validate()?;
+        }
+        if let Some(c) = &self.cone {
+            c.validate()?;
+        }
+        Ok(())
+    }
 }
 
 fn default_scenes() -> Vec<SceneCase> {
@@ -148,6 +189,7 @@ pub fn run(
     backend: Backend<'_>,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Outcome, Error> {
+    config.validate()?;
     let start = Instant::now();
     let kernels = match backend {
         Backend::Cpu => None,

@@ -63,6 +63,38 @@ impl VolumeConfig {
             mesh_spp: 4,
         }
     }
+
+    /// Checks every field (named in the error).
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, value: String, expected: &'static str| {
+            Err(Error::InvalidConfig { study: "volume", field, value, expected })
+        };
+        if !PRESETS.contains(&self.preset.as_str()) {
+            return bad("preset", self.preset.clone(), "one of smoke, explosion, clouds");
+        }
+        if !(1..=1024).contains(&self.resolution) {
+            return bad("resolution", self.resolution.to_string(), "in 1..=1024 voxels per axis");
+        }
+        if self.metavoxel_sizes.is_empty() {
+            return bad("metavoxel_sizes", "[]".into(), "at least one metavoxel size");
+        }
+        for &m in &self.metavoxel_sizes {
+            if m == 0 || !self.resolution.is_multiple_of(m) || self.resolution / m > 128 {
+                return bad(
+                    "metavoxel_sizes",
+                    m.to_string(),
+                    "a divisor of the resolution, with at most 128 metavoxels per axis",
+                );
+            }
+        }
+        if !(1..=4096).contains(&self.image) {
+            return bad("image", self.image.to_string(), "an image side in 1..=4096");
+        }
+        if self.mesh_spp == 0 {
+            return bad("mesh_spp", "0".into(), "at least 1 ray per pixel");
+        }
+        Ok(())
+    }
 }
 
 /// One attenuation model against the reference.
@@ -280,6 +312,7 @@ pub fn run(
     backend: Backend<'_>,
     progress: &dyn Fn(&str),
 ) -> Result<VolumeResult, Error> {
+    config.validate()?;
     let bad = |name: &str, value: String, reason: &str| {
         Error::Scene(voxlod_scene::Error::InvalidParameter {
             name: name.into(),
@@ -287,18 +320,6 @@ pub fn run(
             reason: reason.into(),
         })
     };
-    for &m in &config.metavoxel_sizes {
-        if m == 0 || !config.resolution.is_multiple_of(m) || config.resolution / m > 128 {
-            return Err(bad(
-                "metavoxel size",
-                m.to_string(),
-                "must divide the resolution, with at most 128 metavoxels per axis",
-            ));
-        }
-    }
-    if config.metavoxel_sizes.is_empty() {
-        return Err(bad("metavoxel sizes", "[]".into(), "at least one"));
-    }
     progress("particles");
     let system = preset(&config.preset, config.particles)?;
     let spheres = system.at(system.time);

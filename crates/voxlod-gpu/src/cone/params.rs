@@ -37,7 +37,7 @@ pub struct GpuDirectionalRadiance {
     pub pad1: f32,
 }
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`; see there for the fields).
+/// The kernel's parameters (mirrors WGSL `Params`; see there for the fields).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuConeParams {
@@ -85,7 +85,7 @@ pub struct GpuShade {
     pub steps: [u32; 4],
 }
 
-/// The uniform parameters, every constant computed on the host exactly as voxlod-cone
+/// The parameters, every constant computed on the host exactly as voxlod-cone
 /// computes it (same `f32` expressions).
 pub(super) fn params(
     tree: &GpuConeOctree,

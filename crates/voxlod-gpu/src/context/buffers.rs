@@ -64,13 +64,19 @@ impl Context {
         })
     }
 
-    /// A uniform buffer holding `contents`.
+    /// A small parameter buffer holding `contents`, bindable as a uniform or a read-only
+    /// storage buffer.
+    ///
+    /// The kernels read their parameters as `var<storage, read>`, not `var<uniform>`: Mesa's
+    /// lavapipe compiles a new variant of a kernel for every new value of a uniform that a
+    /// branch or a loop bound reads (whole seconds per dispatch for the larger kernels, and
+    /// every frame or case has new values), and it never does so for storage buffers.
     pub fn uniform(&self, what: &'static str, contents: &[u8]) -> Result<wgpu::Buffer> {
         self.guarded("allocating a uniform buffer", || {
             let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(what),
                 size: (contents.len() as u64).max(16).next_multiple_of(16),
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: true,
             });
             buffer

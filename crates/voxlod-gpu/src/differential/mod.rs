@@ -88,7 +88,8 @@ pub fn reference(renderer: &DifferentialRenderer, ambient: Vec3) -> (Image, [u64
     (out, [img.elements, img.shaded, img.shadow_elements])
 }
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`; see there for the fields).
+/// The kernel's parameters, bound as a read-only storage buffer (mirrors WGSL `Params`; see
+/// there for the fields).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuDifferentialParams {
@@ -234,9 +235,9 @@ impl<'a> DifferentialKernel<'a> {
         while first < height {
             let rows = rows_per.min(height - first);
             let p = GpuDifferentialParams { size: [width, height, first, rows], ..params };
-            let uniform = ctx.uniform("differential params", bytemuck::bytes_of(&p))?;
+            let p_buffer = ctx.uniform("differential params", bytemuck::bytes_of(&p))?;
             let buffers =
-                [&uniform, &tree.levels, &tree.nodes, &tree.tiles, &tree.payload, masks, &out];
+                [&p_buffer, &tree.levels, &tree.nodes, &tree.tiles, &tree.payload, masks, &out];
             let workgroups = ctx.image_dispatch("differential dispatch", width, rows)?;
             ctx.dispatch("differential cone tracing", pipeline, &buffers, workgroups)?;
             first += rows;
@@ -254,7 +255,7 @@ impl<'a> DifferentialKernel<'a> {
         Ok((img, counts))
     }
 
-    /// The uniform parameters, from the renderer's own set-up ([`DifferentialRenderer::
+    /// The parameters, from the renderer's own set-up ([`DifferentialRenderer::
     /// frame_constants`]).
     fn params(
         tree: &GpuMicrosurfaceOctree,

@@ -45,7 +45,7 @@ struct Record {
     d: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> brick_table: array<u32>;
 @group(0) @binding(2) var<storage, read> bricks: array<Brick>;
 @group(0) @binding(3) var<storage, read> slots: array<u32>;

@@ -29,7 +29,7 @@ struct ShadeTri {
     uv2: vec4<f32>,  // vertex UV 2 (xy)
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read> shade_tris: array<ShadeTri>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read_write> sums: array<vec4<f32>>; // rgb sum, hits

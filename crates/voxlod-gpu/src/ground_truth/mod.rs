@@ -69,7 +69,7 @@ pub const WGSL: &str = concat!(
 /// Camera rays per dispatch, at most (a bound on a dispatch's duration on real GPUs).
 pub const RAYS_PER_DISPATCH: u64 = 1 << 20;
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuGroundTruthParams {

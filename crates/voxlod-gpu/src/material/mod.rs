@@ -185,7 +185,7 @@ impl GpuMaterials {
     }
 }
 
-/// The test kernel's uniform parameters (mirrors WGSL `Params` of `probe.wgsl`).
+/// The test kernel's parameters (mirrors WGSL `Params` of `probe.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuProbeParams {

@@ -6,7 +6,7 @@ struct Params {
     counts: vec4<u32>, // x = number of queries
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
 @group(0) @binding(2) var<storage, read> textures: Textures;
 @group(0) @binding(3) var<storage, read> texels: array<u32>;

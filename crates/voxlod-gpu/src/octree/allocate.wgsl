@@ -3,7 +3,7 @@
 // `level` (parent order, hence Morton order), and tile `r` records its parent. No atomics.
 // `extra` = the number of flagged parents (the scan's total).
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> levels: array<GpuLevel>;
 @group(0) @binding(2) var<storage, read_write> nodes: array<GpuNode>;
 @group(0) @binding(3) var<storage, read> ranks: array<u32>;

@@ -1,6 +1,6 @@
 // Fill: nodes `extra .. extra + n` get no child tile and an empty mask.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(2) var<storage, read_write> nodes: array<GpuNode>;
 
 @compute @workgroup_size(64)

@@ -2,7 +2,7 @@
 // a leaf reached twice means a voxel given twice (the host then names it). With
 // `extra` = 1 the voxel's payload is also written to its leaf.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read> coords: array<u32>;
 @group(0) @binding(4) var<storage, read_write> hits: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> duplicate: array<atomic<u32>>;

@@ -2,7 +2,7 @@
 // parent's +a neighbour (a Morton increment on a dense parent level, the parent tile's own
 // node or its tile link on a sparse one).
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> levels: array<GpuLevel>;
 @group(0) @binding(2) var<storage, read> nodes: array<GpuNode>;
 @group(0) @binding(3) var<storage, read> tile_parent: array<u32>;

@@ -3,7 +3,7 @@
 // at `level + 1`: set the parent's flag; d = 0 also sets the voxel's octant in its parent's
 // mask. Relaxed atomics: every writer of a flag writes the same 1, masks are OR-ed.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read> coords: array<u32>;
 @group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<atomic<u32>>;

@@ -1,8 +1,8 @@
-//! The octree-build kernels' uniform parameters, the `#[repr(C)]` mirror of the WGSL
+//! The octree-build kernels' parameters, the `#[repr(C)]` mirror of the WGSL
 //! `Params` every kernel reads, checked (with voxlod-octree's flat-layout types, which the
 //! kernels share) against the WGSL by naga reflection.
 
-/// The kernels' uniform parameters (mirrors WGSL `Params`).
+/// The kernels' parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuOctreeParams {

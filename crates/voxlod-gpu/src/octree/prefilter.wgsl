@@ -3,7 +3,7 @@
 // and writes their mean, summed in octant order from zero and then scaled by 1/8: the CPU's
 // operations in the CPU's order. A node without children keeps the zeroed (empty) payload.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> levels: array<GpuLevel>;
 @group(0) @binding(2) var<storage, read> nodes: array<GpuNode>;
 @group(0) @binding(3) var<storage, read_write> payload: array<Average>;

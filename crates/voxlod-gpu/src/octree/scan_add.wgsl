@@ -1,7 +1,7 @@
 // Exclusive prefix sum, pass 2: one invocation per value adds its block's offset (the
 // exclusive scan of the block totals, done by the same two passes one level up).
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read_write> data: array<u32>;
 @group(0) @binding(4) var<storage, read> sums: array<u32>;
 

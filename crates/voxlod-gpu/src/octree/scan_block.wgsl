@@ -2,7 +2,7 @@
 // values in place (two per invocation, a Hillis–Steele scan of the pair sums in workgroup
 // memory) and writes the block's total to `sums[block]`.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read_write> data: array<u32>;
 @group(0) @binding(4) var<storage, read_write> sums: array<u32>;
 

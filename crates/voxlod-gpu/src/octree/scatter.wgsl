@@ -1,6 +1,6 @@
 // Scatter: one invocation per voxel writes its payload to its leaf.
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read> coords: array<u32>;
 @group(0) @binding(4) var<storage, read> voxel_payload: array<Average>;
 @group(0) @binding(5) var<storage, read_write> payload: array<Average>;

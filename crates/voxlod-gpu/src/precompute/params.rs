@@ -1,7 +1,7 @@
 //! The `#[repr(C)]` mirrors of the precompute kernel's WGSL structs (uniform, voxels, local
 //! triangles, per-voxel and per-line results), checked against the WGSL by naga reflection.
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuPrecomputeParams {

@@ -60,7 +60,7 @@ struct LineOut {
     albedo: vec4<f32>, // textured albedo of a surface hit
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> voxels: array<Voxel>;
 @group(0) @binding(2) var<storage, read> tris: array<Tri>;
 @group(0) @binding(3) var<storage, read> shade: array<ShadeTri>;

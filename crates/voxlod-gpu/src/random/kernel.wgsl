@@ -5,7 +5,7 @@ struct Params {
     counts: vec4<u32>, // x = inputs
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> inputs: array<vec4<u32>>;   // (id, sample, dim, 0)
 @group(0) @binding(2) var<storage, read_write> outputs: array<vec4<u32>>; // pcg3d, rand_f32 bits
 

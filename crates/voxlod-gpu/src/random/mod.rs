@@ -14,7 +14,7 @@ pub const WGSL: &str = include_str!("random.wgsl");
 /// The test kernel: [`WGSL`] followed by an entry point evaluating it on a list of counters.
 pub const KERNEL_WGSL: &str = concat!(include_str!("random.wgsl"), include_str!("kernel.wgsl"));
 
-/// The test kernel's uniform parameters (mirrors WGSL `Params`).
+/// The test kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuRandomParams {

@@ -132,7 +132,7 @@ impl GpuHit {
     }
 }
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuRaycastParams {

@@ -10,7 +10,7 @@ struct Params {
     counts: vec4<u32>, // x = rays, y = nodes, z = 0, w = 0
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(3) var<storage, read> rays: array<Ray>;
 @group(0) @binding(4) var<storage, read_write> hits: array<Hit>;
 

@@ -23,7 +23,7 @@ struct Candidate {
     hi: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> particles: array<Candidate>;
 @group(0) @binding(2) var<storage, read_write> result: array<u32>;
 

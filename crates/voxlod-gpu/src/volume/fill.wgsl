@@ -28,7 +28,7 @@ struct Slot {
     range: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(2) var<storage, read> preps: array<Prep>;
 @group(0) @binding(3) var<storage, read> slots: array<Slot>;

@@ -21,7 +21,7 @@ struct Params {
     mode: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> depth: array<f32>;
 @group(0) @binding(4) var<storage, read_write> image: array<vec4<f32>>;

@@ -42,7 +42,7 @@ pub struct GpuCandidate {
     pub hi: [u32; 4],
 }
 
-/// Uniform of the binning kernel (mirrors WGSL `Params` of `binning.wgsl`).
+/// Parameters of the binning kernel (mirrors WGSL `Params` of `binning.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuBinParams {
@@ -70,7 +70,7 @@ pub struct GpuSlot {
     pub range: [u32; 4],
 }
 
-/// Uniform of the fill kernel (mirrors WGSL `Params` of `fill.wgsl`).
+/// Parameters of the fill kernel (mirrors WGSL `Params` of `fill.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuFillParams {
@@ -80,7 +80,7 @@ pub struct GpuFillParams {
     pub frame: GpuFrame,
 }
 
-/// Uniform of the propagation kernel (mirrors WGSL `Params` of `propagate.wgsl`).
+/// Parameters of the propagation kernel (mirrors WGSL `Params` of `propagate.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuPropagateParams {
@@ -92,7 +92,7 @@ pub struct GpuPropagateParams {
     pub ambient: [f32; 4],
 }
 
-/// Uniform of the march kernel (mirrors WGSL `Params` of `march.wgsl`).
+/// Parameters of the march kernel (mirrors WGSL `Params` of `march.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuMarchParams {

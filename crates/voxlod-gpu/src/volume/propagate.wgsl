@@ -22,7 +22,7 @@ struct Column {
     range: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> columns: array<Column>;
 @group(0) @binding(2) var<storage, read> slots: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> boxes: array<u32>;

@@ -96,7 +96,7 @@ pub struct GpuTriangle {
     pub plane: [f32; 4],
 }
 
-/// The kernel's uniform parameters (mirrors WGSL `Params`).
+/// The kernel's parameters (mirrors WGSL `Params`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuVoxelizeParams {

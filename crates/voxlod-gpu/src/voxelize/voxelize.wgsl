@@ -23,7 +23,7 @@ struct Params {
     batch: vec4<u32>, // x = triangles in this batch, y = invocations, z = 1 to count, w = 0
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(0) var<storage, read> params: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var<storage, read> starts: array<u32>;
 @group(0) @binding(3) var<storage, read_write> bits: array<atomic<u32>>;

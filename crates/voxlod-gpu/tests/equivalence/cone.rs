@@ -42,7 +42,7 @@ use voxlod_format::{GridSpec, morton};
 use voxlod_gpu::cone::{ConeKernel, ConeQuery, ConeShade, GpuMedium, ShadingPoint, reference};
 use voxlod_octree::{AveragePayload, BuildOptions, Directional, FlatOctree, NONE, Octree, Payload};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 /// Per-point bound (module docs).
 pub const BOUND: f64 = 1e-3;
@@ -363,10 +363,10 @@ thread_local! {
 }
 
 /// GPU vs CPU on `cases`, both payloads; on the CPU backend the flat-layout sampling check.
-fn compare_cases(backend: &Backend, cases: &[Case], what: &str) -> Result<Measure, String> {
+fn compare_cases(backend: &Executor, cases: &[Case], what: &str) -> Result<Measure, String> {
     let ctx = match backend {
-        Backend::Cpu => return flat_sampling(cases, what),
-        Backend::Gpu(ctx) => ctx,
+        Executor::Cpu => return flat_sampling(cases, what),
+        Executor::Gpu(ctx) => ctx,
     };
     let kernel = ConeKernel::new(ctx);
     TRACE_SECONDS.with(|s| s.set(0.0));
@@ -386,7 +386,7 @@ fn compare_cases(backend: &Backend, cases: &[Case], what: &str) -> Result<Measur
 }
 
 /// The floor+ceiling and cornell scenes (module docs).
-pub fn scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     compare_cases(
         backend,
         scene_cases(),
@@ -395,19 +395,19 @@ pub fn scenes(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Random voxel sets, options and points (module docs).
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     compare_cases(backend, property_cases(), "10 random octrees × 64 points; iso + dir")
 }
 
 /// The control: the same check against a reference traced with `step_factor` ×1.05 must fail.
-pub fn control(backend: &Backend) -> Result<Measure, String> {
+pub fn control(backend: &Executor) -> Result<Measure, String> {
     let c = &scene_cases()[1];
     let q = c.query;
     let perturbed = TraceOptions { step_factor: c.options.step_factor * 1.05, ..c.options };
     let want = cpu_shades(&c.iso, perturbed, q, &c.points)?;
     let got = match backend {
-        Backend::Cpu => cpu_shades(&c.iso, c.options, q, &c.points)?,
-        Backend::Gpu(ctx) => {
+        Executor::Cpu => cpu_shades(&c.iso, c.options, q, &c.points)?,
+        Executor::Gpu(ctx) => {
             gpu_shades(&ConeKernel::new(ctx), &c.iso, c.options, q, &c.points, c.width)?
         }
     };
@@ -424,7 +424,7 @@ pub fn control(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Bad options get voxlod-cone's error word for word on the GPU path.
-pub fn errors(backend: &Backend) -> Result<Measure, String> {
+pub fn errors(backend: &Executor) -> Result<Measure, String> {
     let c = &scene_cases()[0];
     let bad = [
         TraceOptions { diffuse_aperture_deg: 180.0, ..c.options },
@@ -436,8 +436,8 @@ pub fn errors(backend: &Backend) -> Result<Measure, String> {
     for o in bad {
         let want = ConeTracer::new(&c.iso, o).err().map(|e| e.to_string());
         let got = match backend {
-            Backend::Cpu => ConeTracer::new(&c.iso, o).err().map(|e| e.to_string()),
-            Backend::Gpu(ctx) => {
+            Executor::Cpu => ConeTracer::new(&c.iso, o).err().map(|e| e.to_string()),
+            Executor::Gpu(ctx) => {
                 let k = ConeKernel::new(ctx);
                 let up = k.upload(&c.iso).map_err(|e| e.to_string())?;
                 k.trace(&up, &o, c.query, &c.points, c.width).err().map(|e| e.to_string())

@@ -43,7 +43,7 @@ use voxlod_octree::microsurface::special::{erfc_f32, erfc_f64};
 use voxlod_octree::{BuildOptions, FlatOctree, MicrosurfacePayload, NONE, Octree, Payload};
 use voxlod_scene::Image;
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 use crate::images::{ImageBound, compare};
 
 /// Per-channel bound, 8-bit sRGB steps (module docs).
@@ -280,10 +280,10 @@ fn renderer(c: &Case) -> Result<DifferentialRenderer<'_>, String> {
 }
 
 /// Images and element counts of the kernel against the CPU on `cases`.
-fn compare_cases(backend: &Backend, cases: &[Case], what: &str) -> Result<Measure, String> {
+fn compare_cases(backend: &Executor, cases: &[Case], what: &str) -> Result<Measure, String> {
     let ctx = match backend {
-        Backend::Cpu => return flat_sampling(cases, what),
-        Backend::Gpu(ctx) => ctx,
+        Executor::Cpu => return flat_sampling(cases, what),
+        Executor::Gpu(ctx) => ctx,
     };
     let kernel = DifferentialKernel::new(ctx);
     let mut measures = Vec::new();
@@ -326,7 +326,7 @@ fn compare_cases(backend: &Backend, cases: &[Case], what: &str) -> Result<Measur
 }
 
 /// The box, blending and depth-of-field frames and the sampled sphere (module docs).
-pub fn scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     compare_cases(
         backend,
         &scene_cases(),
@@ -335,17 +335,17 @@ pub fn scenes(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Random octrees, records, cameras, lights and options.
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     compare_cases(backend, &property_cases(), "8 random octrees × options; 16² px")
 }
 
 /// The control: the scenes against a reference with elements 5 % longer must fail.
-pub fn control(backend: &Backend) -> Result<Measure, String> {
+pub fn control(backend: &Executor) -> Result<Measure, String> {
     let cases = scene_cases();
     let mut measures = Vec::new();
     let kernel = match backend {
-        Backend::Gpu(ctx) => Some(DifferentialKernel::new(ctx)),
-        Backend::Cpu => None,
+        Executor::Gpu(ctx) => Some(DifferentialKernel::new(ctx)),
+        Executor::Cpu => None,
     };
     for c in &cases {
         let longer =
@@ -406,13 +406,13 @@ fn smith_inputs() -> Vec<[f32; 4]> {
 }
 
 /// The kernel's `f32` Λ and erfc against `f64` (module docs).
-pub fn smith(backend: &Backend) -> Result<Measure, String> {
+pub fn smith(backend: &Executor) -> Result<Measure, String> {
     let inputs = smith_inputs();
     let values: Vec<[f32; 2]> = match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             inputs.iter().map(|q| [lambda_cs_f32(q[0], q[1], q[2]), erfc_f32(q[3])]).collect()
         }
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             DifferentialKernel::new(ctx).probe(&inputs).map_err(|e| e.to_string())?
         }
     };

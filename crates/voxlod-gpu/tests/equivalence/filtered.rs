@@ -41,7 +41,7 @@ use voxlod_format::{BrickMap, GridSpec};
 use voxlod_gpu::filtered::{FilteredKernel, GpuRecords, RecordKind};
 use voxlod_scene::{Camera, Image, Light, Scene};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 use crate::images::{ImageBound, compare};
 
 pub const EXACT: ImageBound = ImageBound { per_pixel: 0, fraction: 1.0 };
@@ -160,27 +160,27 @@ fn prefix(kind: RecordKind) -> &'static str {
     }
 }
 
-pub fn averages_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn averages_scenes(backend: &Executor) -> Result<Measure, String> {
     scenes_body(backend, RecordKind::Averages)
 }
 
-pub fn vjk21_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn vjk21_scenes(backend: &Executor) -> Result<Measure, String> {
     scenes_body(backend, RecordKind::Vjk21)
 }
 
-pub fn baseline_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn baseline_scenes(backend: &Executor) -> Result<Measure, String> {
     scenes_body(backend, RecordKind::Baseline)
 }
 
-pub fn baseline_property(backend: &Backend) -> Result<Measure, String> {
+pub fn baseline_property(backend: &Executor) -> Result<Measure, String> {
     property(backend, RecordKind::Baseline)
 }
 
-pub fn averages_property(backend: &Backend) -> Result<Measure, String> {
+pub fn averages_property(backend: &Executor) -> Result<Measure, String> {
     property(backend, RecordKind::Averages)
 }
 
-pub fn vjk21_property(backend: &Backend) -> Result<Measure, String> {
+pub fn vjk21_property(backend: &Executor) -> Result<Measure, String> {
     property(backend, RecordKind::Vjk21)
 }
 
@@ -201,10 +201,10 @@ pub fn cases() -> Vec<(&'static str, Camera, Light, Options)> {
     ]
 }
 
-fn scenes_body(backend: &Backend, kind: RecordKind) -> Result<Measure, String> {
+fn scenes_body(backend: &Executor, kind: RecordKind) -> Result<Measure, String> {
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let bg = Vec3::new(0.1, 0.2, 0.3);
     let mut measures = Vec::new();
@@ -297,12 +297,12 @@ fn bad_input(k: &FilteredKernel<'_>, kind: RecordKind) -> Result<Measure, String
 /// Random cameras (direction, distance, field of view), light directions and shadows on/off,
 /// 32×32 pixels, each image within [`GPU_BOUND`] (`PROPTEST_CASES` sets how many; 32 by
 /// default). CPU row: cached equals uncached, bit for bit.
-fn property(backend: &Backend, kind: RecordKind) -> Result<Measure, String> {
+fn property(backend: &Executor, kind: RecordKind) -> Result<Measure, String> {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let f = fixture();
     let uploaded = match &kernel {
@@ -311,7 +311,7 @@ fn property(backend: &Backend, kind: RecordKind) -> Result<Measure, String> {
     };
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(32);
     let mut runner = TestRunner::new_with_rng(
-        Config { cases, ..Config::default() },
+        Config { cases, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let v3 = || (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0);

@@ -21,7 +21,7 @@ use voxlod_cpu::render::ground_truth::{GBuffer, GroundTruth, Options, render};
 use voxlod_gpu::ground_truth::GroundTruthKernel;
 use voxlod_scene::Scene;
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 use crate::images::{ImageBound, compare};
 
 const EXACT: ImageBound = ImageBound { per_pixel: 0, fraction: 1.0 };
@@ -86,10 +86,10 @@ fn compare_gbuffer(a: &GBuffer, e: &GBuffer) -> (usize, f64) {
 const GBUFFER_TIES: f64 = 0.01;
 const GBUFFER_BOUND: f64 = 1e-4;
 
-pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes_body(backend: &Executor) -> Result<Measure, String> {
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let mut measures = Vec::new();
     for (name, scene, options) in scenes() {
@@ -137,7 +137,7 @@ pub fn scenes_body(backend: &Backend) -> Result<Measure, String> {
     Ok(Measure::combine(&measures))
 }
 
-pub fn backend_slug(backend: &Backend) -> String {
+pub fn backend_slug(backend: &Executor) -> String {
     backend
         .name()
         .chars()
@@ -149,12 +149,12 @@ pub fn backend_slug(backend: &Backend) -> String {
 /// Random cameras (direction, distance, field of view, seed, shadows on/off) on `cornell` and
 /// `blinds`, 24×20 pixels at 4 rays per pixel, each image within the bound of [`scenes_body`]
 /// (`PROPTEST_CASES` sets how many; 24 by default, the same cases on every backend).
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let b = |name, kv: &[(&str, &str)]| voxlod_scene::procedural::builtin(name, kv).unwrap();
     let scenes = [b("cornell", &[]), b("blinds", &[("slats", "8"), ("tilt", "-20")])];
@@ -171,7 +171,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
     };
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
     let mut runner = TestRunner::new_with_rng(
-        Config { cases, ..Config::default() },
+        Config { cases, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let strategy = (
@@ -238,20 +238,20 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
 /// pixel, in one dispatch and in dispatches of 3 samples (7 dispatches, the last short) must
 /// agree **bit for bit** (the same samples added in the same order). On the CPU row, the CPU
 /// render against itself with another seed must differ (the comparison can fail).
-pub fn dispatch_split(backend: &Backend) -> Result<Measure, String> {
+pub fn dispatch_split(backend: &Executor) -> Result<Measure, String> {
     let scene = voxlod_scene::procedural::builtin("cornell", &[]).unwrap();
     let g = scene.geometry();
     let bvh = Bvh::new(&g).map_err(|e| e.to_string())?;
     let camera = scene.default_camera().map_err(|e| e.to_string())?;
     let options = Options { width: 24, height: 20, spp: 20, ..Options::default() };
     let (a, b, expect_equal) = match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             let a = render(&scene, &g, &bvh, &camera, &options).map_err(|e| e.to_string())?;
             let other = Options { seed: 1, ..options };
             let b = render(&scene, &g, &bvh, &camera, &other).map_err(|e| e.to_string())?;
             (a.image, b.image, false)
         }
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             let one = GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?;
             let split = GroundTruthKernel::new(ctx)
                 .map_err(|e| e.to_string())?
@@ -370,10 +370,10 @@ fn perturbed(name: &str, scene: &Scene) -> (Scene, &'static str) {
 ///   break that bound against the unperturbed CPU reference (on the CPU row, the CPU renders
 ///   the perturbed scene). (A one-texel shift of the forest's leaf texture does not: its
 ///   leaves are sub-pixel at 48×40 and the shift leaves every pixel within 0 steps.)
-pub fn textured(backend: &Backend) -> Result<Measure, String> {
+pub fn textured(backend: &Executor) -> Result<Measure, String> {
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(GroundTruthKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let render_on = |scene: &Scene, options: &Options| -> Result<GroundTruth, String> {
         match &kernel {

@@ -1,15 +1,21 @@
 //! The cross-backend equivalence suite: every GPU kernel against its CPU reference.
 //!
-//! Modelled on wgpu's own test harness: one test body per kernel ([`voxelize`], [`raycast`], [`random`], [`materials`], [`ground_truth`], [`filtered`],
-//! [`voxels`], [`octree`], [`precompute`], [`cone`], [`differential`], [`volume`]),
-//! each run on the CPU reference and then on every adapter wgpu finds, against the same
-//! oracle and the same stated tolerance; known driver problems are data ([`KNOWN_ISSUES`]:
-//! skip, or expect failure, with the reason), never `#[ignore]`. The suite prints a table
-//! (kernel, backend, max error, bound, result) and writes it to `target/equivalence.txt`,
-//! which `cargo xtask test` prints at the end.
+//! Modelled on wgpu's own test harness: kernel bodies ([`voxelize`], [`raycast`], [`random`],
+//! [`materials`], [`ground_truth`], [`filtered`], [`voxels`], [`octree`], [`precompute`],
+//! [`cone`], [`differential`], [`volume`]), each run on the CPU reference and then on every adapter wgpu finds,
+//! against the same oracle and the same stated tolerance; known driver problems are data
+//! ([`KNOWN_ISSUES`]: skip, or expect failure, with the reason), never `#[ignore]`.
 //!
-//! No adapter at all is a failure (loudly), unless `VOXLOD_ALLOW_NO_GPU=1`
-//! (`cargo xtask test --allow-no-gpu`): a run that checks nothing must not look green.
+//! Each (kernel body × executor) is its own test, named `<kernel body> :: <executor>` (e.g.
+//! `octree build topology (scenes) :: llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`), so the
+//! usual name filter picks kernels: `cargo test -p voxlod-gpu --test equivalence octree` runs
+//! the octree rows only, and a failure names the kernel and the adapter. The suite writes its
+//! table (kernel, backend, max error, bound, result, seconds) to `target/equivalence.txt`,
+//! which `cargo xtask test` prints at the end; a filtered run's table says it is partial.
+//!
+//! No adapter at all is a failure (loudly, in every kernel's GPU test), unless
+//! `VOXLOD_ALLOW_NO_GPU=1` (`cargo xtask test --allow-no-gpu`): a run that checks nothing must
+//! not look green.
 
 mod cone;
 mod differential;
@@ -26,7 +32,10 @@ mod volume;
 mod voxelize;
 mod voxels;
 
-use harness::{Backend, Expect, KnownIssue, Suite};
+use std::process::ExitCode;
+
+use harness::{Expect, Kernel, KnownIssue};
+use libtest_mimic::Trial;
 
 /// Known problems, as data: `(kernel, backend-name substring, expectation, reason)`. A listed
 /// failure does not fail the suite; a listed failure that passes does (the entry is stale).
@@ -35,74 +44,81 @@ use harness::{Backend, Expect, KnownIssue, Suite};
 /// and tested in voxlod-cpu's `voxelize::raster` tests).
 pub const KNOWN_ISSUES: &[KnownIssue] = &[];
 
-#[test]
-fn equivalence_suite() {
-    let mut suite = Suite::new(KNOWN_ISSUES);
-    let contexts = harness::contexts(&mut suite);
-    let mut backends = vec![Backend::Cpu];
-    backends.extend(contexts.iter().map(Backend::Gpu));
-    for backend in &backends {
-        suite.run("voxelize (scenes)", backend, voxelize::scenes);
-        suite.run("voxelize (full range)", backend, voxelize::full_range);
-        suite.run("voxelize (proptest)", backend, voxelize::property);
-        suite.run("raycast (scenes)", backend, raycast::scenes);
-        suite.run("raycast (proptest)", backend, raycast::property);
-        suite.run("random (exact)", backend, random::exact);
-        suite.run("materials (exact)", backend, materials::exact);
-        suite.run("ground truth (scenes)", backend, ground_truth::scenes_body);
-        suite.run("ground truth (textures)", backend, ground_truth::textured);
-        suite.run("ground truth (proptest)", backend, ground_truth::property);
-        suite.run("ground truth (dispatches)", backend, ground_truth::dispatch_split);
-        suite.run("filtered Averages (scenes)", backend, filtered::averages_scenes);
-        suite.run("filtered Averages (proptest)", backend, filtered::averages_property);
-        suite.run("filtered VJK21 (scenes)", backend, filtered::vjk21_scenes);
-        suite.run("filtered VJK21 (proptest)", backend, filtered::vjk21_property);
-        suite.run("baseline voxels (scenes)", backend, filtered::baseline_scenes);
-        suite.run("baseline voxels (proptest)", backend, filtered::baseline_property);
-        suite.run("filtered virtual mesh (scenes)", backend, voxels::vmesh_scenes);
-        suite.run("filtered virtual mesh (proptest)", backend, voxels::vmesh_property);
-        suite.run("filtered Adaptive (scenes)", backend, voxels::adaptive_scenes);
-        suite.run("filtered Adaptive (proptest)", backend, voxels::adaptive_property);
-        suite.run("octree build topology (scenes)", backend, octree::topology_scenes);
-        suite.run("octree build Averages (scenes)", backend, octree::payload_scenes);
-        suite.run("octree build (proptest)", backend, octree::property);
-        suite.run("octree prefix sum (exact)", backend, octree::prefix_sum);
-        suite.run("precompute lines (scenes)", backend, precompute::lines_scenes);
-        suite.run("precompute voxels (scenes)", backend, precompute::voxels_scenes);
-        suite.run("precompute lines (proptest)", backend, precompute::lines_property);
-        suite.run("precompute voxels (proptest)", backend, precompute::voxels_property);
-        suite.run("precompute (dispatches)", backend, precompute::dispatches);
-        suite.run("cone tracing (scenes)", backend, cone::scenes);
-        suite.run("cone tracing (proptest)", backend, cone::property);
-        suite.run("cone tracing (control)", backend, cone::control);
-        suite.run("cone tracing (errors)", backend, cone::errors);
-        suite.run("differential cone tracing (scenes)", backend, differential::scenes);
-        suite.run("differential cone tracing (proptest)", backend, differential::property);
-        suite.run("differential cone tracing (control)", backend, differential::control);
-        suite.run("differential Smith f32 vs f64", backend, differential::smith);
-        suite.run("volume binning (scenes)", backend, volume::binning_scenes);
-        suite.run("volume fill (scenes)", backend, volume::fill_scenes);
-        suite.run("volume propagation (scenes)", backend, volume::propagation_scenes);
-        suite.run("volume march (scenes)", backend, volume::march_scenes);
-        suite.run("volume frame (scenes)", backend, volume::frame_scenes);
-        suite.run("volume frame (property)", backend, volume::property);
-        suite.run("volume frame (extremes)", backend, volume::extremes);
-        suite.run("volume control (must fail)", backend, volume::control);
-        suite.run("volume errors", backend, volume::errors);
-    }
-    suite.finish();
+/// Every kernel body, in the table's order.
+const KERNELS: &[Kernel] = &[
+    Kernel { name: "voxelize (scenes)", body: voxelize::scenes },
+    Kernel { name: "voxelize (full range)", body: voxelize::full_range },
+    Kernel { name: "voxelize (proptest)", body: voxelize::property },
+    Kernel { name: "raycast (scenes)", body: raycast::scenes },
+    Kernel { name: "raycast (proptest)", body: raycast::property },
+    Kernel { name: "random (exact)", body: random::exact },
+    Kernel { name: "materials (exact)", body: materials::exact },
+    Kernel { name: "ground truth (scenes)", body: ground_truth::scenes_body },
+    Kernel { name: "ground truth (textures)", body: ground_truth::textured },
+    Kernel { name: "ground truth (proptest)", body: ground_truth::property },
+    Kernel { name: "ground truth (dispatches)", body: ground_truth::dispatch_split },
+    Kernel { name: "filtered Averages (scenes)", body: filtered::averages_scenes },
+    Kernel { name: "filtered Averages (proptest)", body: filtered::averages_property },
+    Kernel { name: "filtered VJK21 (scenes)", body: filtered::vjk21_scenes },
+    Kernel { name: "filtered VJK21 (proptest)", body: filtered::vjk21_property },
+    Kernel { name: "baseline voxels (scenes)", body: filtered::baseline_scenes },
+    Kernel { name: "baseline voxels (proptest)", body: filtered::baseline_property },
+    Kernel { name: "filtered virtual mesh (scenes)", body: voxels::vmesh_scenes },
+    Kernel { name: "filtered virtual mesh (proptest)", body: voxels::vmesh_property },
+    Kernel { name: "filtered Adaptive (scenes)", body: voxels::adaptive_scenes },
+    Kernel { name: "filtered Adaptive (proptest)", body: voxels::adaptive_property },
+    Kernel { name: "octree build topology (scenes)", body: octree::topology_scenes },
+    Kernel { name: "octree build Averages (scenes)", body: octree::payload_scenes },
+    Kernel { name: "octree build (proptest)", body: octree::property },
+    Kernel { name: "octree prefix sum (exact)", body: octree::prefix_sum },
+    Kernel { name: "precompute lines (scenes)", body: precompute::lines_scenes },
+    Kernel { name: "precompute voxels (scenes)", body: precompute::voxels_scenes },
+    Kernel { name: "precompute lines (proptest)", body: precompute::lines_property },
+    Kernel { name: "precompute voxels (proptest)", body: precompute::voxels_property },
+    Kernel { name: "precompute (dispatches)", body: precompute::dispatches },
+    Kernel { name: "cone tracing (scenes)", body: cone::scenes },
+    Kernel { name: "cone tracing (proptest)", body: cone::property },
+    Kernel { name: "cone tracing (control)", body: cone::control },
+    Kernel { name: "cone tracing (errors)", body: cone::errors },
+    Kernel { name: "differential cone tracing (scenes)", body: differential::scenes },
+    Kernel { name: "differential cone tracing (proptest)", body: differential::property },
+    Kernel { name: "differential cone tracing (control)", body: differential::control },
+    Kernel { name: "differential Smith f32 vs f64", body: differential::smith },
+    Kernel { name: "volume binning (scenes)", body: volume::binning_scenes },
+    Kernel { name: "volume fill (scenes)", body: volume::fill_scenes },
+    Kernel { name: "volume propagation (scenes)", body: volume::propagation_scenes },
+    Kernel { name: "volume march (scenes)", body: volume::march_scenes },
+    Kernel { name: "volume frame (scenes)", body: volume::frame_scenes },
+    Kernel { name: "volume frame (property)", body: volume::property },
+    Kernel { name: "volume frame (extremes)", body: volume::extremes },
+    Kernel { name: "volume control (must fail)", body: volume::control },
+    Kernel { name: "volume errors", body: volume::errors },
+];
+
+fn main() -> ExitCode {
+    let harness_tests = vec![Trial::test(
+        "harness :: known issues are matched by kernel and adapter",
+        known_issues_are_matched_by_kernel_and_adapter,
+    )];
+    harness::main(KERNELS, KNOWN_ISSUES, harness_tests)
 }
 
-#[test]
-fn known_issues_are_matched_by_kernel_and_adapter() {
+fn known_issues_are_matched_by_kernel_and_adapter() -> Result<(), libtest_mimic::Failed> {
     let issues = [KnownIssue {
         kernel: "raycast",
         adapter: "llvmpipe",
         expect: Expect::Fail,
         reason: "test entry",
     }];
-    let suite = Suite::new(&issues);
-    assert!(suite.known("raycast (scenes)", "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)").is_some());
-    assert!(suite.known("voxelize (scenes)", "llvmpipe (LLVM 15.0.6)").is_none());
-    assert!(suite.known("raycast (scenes)", "cpu reference").is_none());
+    let known = |kernel, adapter| harness::known(&issues, kernel, adapter).is_some();
+    if !known("raycast (scenes)", "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)") {
+        return Err("a listed kernel on a listed adapter is not matched".into());
+    }
+    if known("voxelize (scenes)", "llvmpipe (LLVM 15.0.6)") {
+        return Err("another kernel is matched".into());
+    }
+    if known("raycast (scenes)", "cpu reference") {
+        return Err("another executor is matched".into());
+    }
+    Ok(())
 }

@@ -24,7 +24,7 @@ use glam::{Vec2, Vec4};
 use voxlod_gpu::material::MaterialKernel;
 use voxlod_scene::{AlphaMode, Material, Sampler, Scene, Texture, TextureRef, WrapMode};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 const TEXTURE_BOUND: f32 = 1.0 / (1 << 21) as f32;
 const ALBEDO_BOUND: f32 = 1.0 / (1 << 20) as f32;
@@ -186,12 +186,12 @@ fn shifted(scene: &Scene) -> Scene {
 }
 
 fn evaluate(
-    backend: &Backend,
+    backend: &Executor,
     scene: &Scene,
     q: &[(u32, Vec2)],
 ) -> Result<Vec<(Vec4, Vec4)>, String> {
     match backend {
-        Backend::Cpu => Ok(q
+        Executor::Cpu => Ok(q
             .iter()
             .map(|&(m, uv)| {
                 let mat = &scene.materials[m as usize];
@@ -202,7 +202,7 @@ fn evaluate(
                 (t, s.albedo.extend(s.alpha))
             })
             .collect()),
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             let k = MaterialKernel::new(ctx).map_err(|e| e.to_string())?;
             let out = k.eval(scene, q).map_err(|e| e.to_string())?;
             Ok(out.into_iter().map(|p| (p.texture, p.sample)).collect())
@@ -210,7 +210,7 @@ fn evaluate(
     }
 }
 
-pub fn exact(backend: &Backend) -> Result<Measure, String> {
+pub fn exact(backend: &Executor) -> Result<Measure, String> {
     let mut rng = Rng(0x5eed_7e47);
     let scene = scene(&mut rng);
     let all = queries(&scene, &mut rng);

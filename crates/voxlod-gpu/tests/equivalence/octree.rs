@@ -27,7 +27,7 @@ use voxlod_format::GridSpec;
 use voxlod_gpu::octree::OctreeBuilder;
 use voxlod_octree::{AveragePayload, BuildOptions, FlatOctree, Octree, Payload};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 type Voxels = Vec<(UVec3, AveragePayload)>;
 
@@ -132,10 +132,10 @@ fn oracle(grid: GridSpec, voxels: &Voxels, o: &BuildOptions) -> FlatOctree<Avera
     FlatOctree::from_octree(&tree).expect("fits")
 }
 
-fn builder<'a>(backend: &Backend<'a>) -> Result<Option<OctreeBuilder<'a>>, String> {
+fn builder<'a>(backend: &Executor<'a>) -> Result<Option<OctreeBuilder<'a>>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => OctreeBuilder::new(ctx).map(Some).map_err(|e| e.to_string()),
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => OctreeBuilder::new(ctx).map(Some).map_err(|e| e.to_string()),
     }
 }
 
@@ -229,7 +229,7 @@ fn exact(cases: Vec<(String, u64, String)>) -> Measure {
 }
 
 /// Fixed scenes, topology exact, plus the control.
-pub fn topology_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn topology_scenes(backend: &Executor) -> Result<Measure, String> {
     let b = builder(backend)?;
     let mut cases = Vec::new();
     let mut nodes = 0;
@@ -243,7 +243,7 @@ pub fn topology_scenes(backend: &Backend) -> Result<Measure, String> {
     let mut m = exact(cases);
     m.note = format!("{} ({nodes} nodes)", m.note);
     let mut measures = vec![m, bad_input(&b), control(&b)?];
-    if let (Backend::Gpu(ctx), Some(b)) = (backend, &b) {
+    if let (Executor::Gpu(ctx), Some(b)) = (backend, &b) {
         measures.push(limits(ctx, b));
     }
     Ok(Measure::combine(&measures))
@@ -349,7 +349,7 @@ fn control(b: &Option<OctreeBuilder>) -> Result<Measure, String> {
 }
 
 /// Fixed scenes, Averages payloads within `8·depth·2⁻²⁴` (module docs), topology exact.
-pub fn payload_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn payload_scenes(backend: &Executor) -> Result<Measure, String> {
     let b = builder(backend)?;
     let mut worst: (f64, f64, String) = (0.0, f64::INFINITY, String::new());
     let mut all_pass = true;
@@ -381,7 +381,7 @@ pub fn payload_scenes(backend: &Backend) -> Result<Measure, String> {
 
 /// Random voxel sets: dims 1–20 per axis (non-powers of two, tiny), density from empty to
 /// full, random dense depth and extra depth; topology exact, payloads within their bound.
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     let strategy = (
         (1u32..=20, 1u32..=20, 1u32..=20),
         prop_oneof![Just(0.0f64), Just(1.0), 0.0f64..0.3, Just(-1.0)],
@@ -391,7 +391,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
     );
     let b = builder(backend)?;
     let mut runner = TestRunner::new_with_rng(
-        Config { cases: 48, ..Config::default() },
+        Config { cases: 48, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let worst = RefCell::new((0u64, 0.0f64, String::new()));
@@ -454,7 +454,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
 /// 512-value blocks, past 512² (three passes of block sums) and past one dispatch dimension: 0/1 flags of varying density
 /// and small counts. The CPU row runs the same block decomposition on the CPU (block scans,
 /// a scan of the block totals, the add pass) against the sequential oracle.
-pub fn prefix_sum(backend: &Backend) -> Result<Measure, String> {
+pub fn prefix_sum(backend: &Executor) -> Result<Measure, String> {
     let b = builder(backend)?;
     let mut worst = (0u64, String::new());
     // 65 535 · 64 + 1: the add pass's 2D dispatch split (x = 65 535, y = 2).

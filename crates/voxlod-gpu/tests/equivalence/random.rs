@@ -9,7 +9,7 @@ use voxlod_cpu::random::{pcg3d, rand_f32};
 use voxlod_cpu::render::pixel_samples::Streams;
 use voxlod_gpu::random::RandomKernel;
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 fn oracle(c: [u32; 3]) -> [u32; 4] {
     const M: u64 = 0xffff_ffff;
@@ -57,17 +57,17 @@ fn counters() -> Vec<[u32; 3]> {
     out
 }
 
-pub fn exact(backend: &Backend) -> Result<Measure, String> {
+pub fn exact(backend: &Executor) -> Result<Measure, String> {
     let inputs = counters();
     let actual: Vec<[u32; 4]> = match backend {
-        Backend::Cpu => inputs
+        Executor::Cpu => inputs
             .iter()
             .map(|&[a, b, c]| {
                 let v = pcg3d(a, b, c);
                 [v[0], v[1], v[2], rand_f32(a, b, c).to_bits()]
             })
             .collect(),
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             RandomKernel::new(ctx).and_then(|k| k.eval(&inputs)).map_err(|e| e.to_string())?
         }
     };

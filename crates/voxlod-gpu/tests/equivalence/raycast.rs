@@ -21,7 +21,7 @@ use voxlod_cpu::raycast::{Bvh, Hit};
 use voxlod_gpu::raycast::{GpuRay, RayCaster, primary_rays};
 use voxlod_scene::{Camera, Geometry};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 const T_BOUND: f64 = 1e-4;
 const BARY_MARGIN: f64 = 1e-3;
@@ -71,10 +71,10 @@ fn decode(r: &GpuRay) -> (DVec3, DVec3, f64, f64) {
 }
 
 /// The GPU kernel of `backend`, compiled once per body.
-fn kernel<'a>(backend: &Backend<'a>) -> Result<Option<RayCaster<'a>>, String> {
+fn kernel<'a>(backend: &Executor<'a>) -> Result<Option<RayCaster<'a>>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => RayCaster::new(ctx).map(Some).map_err(|e| e.to_string()),
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => RayCaster::new(ctx).map(Some).map_err(|e| e.to_string()),
     }
 }
 
@@ -223,7 +223,7 @@ fn soup(n: u32, seed: u32) -> Geometry {
 
 /// The bunny from two views (framing and close-up, where every ray hits), and a triangle soup
 /// hit by random rays.
-pub fn scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     let kernel = kernel(backend)?;
     let mut tally = Tally::default();
     let bunny = bunny();
@@ -241,13 +241,13 @@ pub fn scenes(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Random triangle soups seen from random cameras.
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     let strategy =
         (1u32..200, any::<u32>(), (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), 0.1f32..1.5);
     let kernel = kernel(backend)?;
     // The same cases on every backend: a fixed seed (PROPTEST_CASES sets how many).
     let mut runner = TestRunner::new_with_rng(
-        Config::default(),
+        Config { failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let tally = RefCell::new(Tally::default());

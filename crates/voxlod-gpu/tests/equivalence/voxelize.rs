@@ -19,7 +19,7 @@ use voxlod_format::GridSpec;
 use voxlod_gpu::voxelize::{VoxelizeOptions, Voxelizer};
 use voxlod_scene::Geometry;
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 
 type Counts = HashMap<UVec3, u32>;
 
@@ -57,10 +57,10 @@ fn oracle(geometry: &Geometry, grid: &GridSpec, mode: Mode) -> Counts {
 }
 
 /// The GPU kernel of `backend`, compiled once per body.
-fn kernel<'a>(backend: &Backend<'a>) -> Result<Option<Voxelizer<'a>>, String> {
+fn kernel<'a>(backend: &Executor<'a>) -> Result<Option<Voxelizer<'a>>, String> {
     match backend {
-        Backend::Cpu => Ok(None),
-        Backend::Gpu(ctx) => Voxelizer::new(ctx).map(Some).map_err(|e| e.to_string()),
+        Executor::Cpu => Ok(None),
+        Executor::Gpu(ctx) => Voxelizer::new(ctx).map(Some).map_err(|e| e.to_string()),
     }
 }
 
@@ -163,7 +163,7 @@ fn measure(cases: Vec<(String, usize, String)>) -> Measure {
 
 /// Fixed scenes: the bunny, a triangle soup with ties and degenerate triangles, and
 /// triangles with far vertices (the full-width integer arithmetic), in both modes.
-pub fn scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn scenes(backend: &Executor) -> Result<Measure, String> {
     let kernel = kernel(backend)?;
     let bunny = bunny();
     let (lo, hi) = bunny.bounds().unwrap();
@@ -207,7 +207,7 @@ fn far(r: f32) -> Geometry {
 
 /// Triangles up to the lattice's range (vertices 1.5·10^6 voxels away, lattice values near
 /// 2^28.5 of the 2^29 limit): the full-width emulated integer arithmetic of the GPU kernel.
-pub fn full_range(backend: &Backend) -> Result<Measure, String> {
+pub fn full_range(backend: &Executor) -> Result<Measure, String> {
     let grid = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(14)).unwrap();
     let g = far(1.5e6);
     let kernel = kernel(backend)?;
@@ -222,7 +222,7 @@ pub fn full_range(backend: &Backend) -> Result<Measure, String> {
 }
 
 /// Random grids (dims, origin, voxel size) and random triangles, many on lattice ties.
-pub fn property(backend: &Backend) -> Result<Measure, String> {
+pub fn property(backend: &Executor) -> Result<Measure, String> {
     let vertex = (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0, any::<bool>());
     let strategy = (
         (1u32..12, 1u32..12, 1u32..12),
@@ -233,7 +233,7 @@ pub fn property(backend: &Backend) -> Result<Measure, String> {
     let kernel = kernel(backend)?;
     // The same cases on every backend: a fixed seed (PROPTEST_CASES sets how many).
     let mut runner = TestRunner::new_with_rng(
-        Config::default(),
+        Config { failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let cases = RefCell::new(Vec::new());

@@ -45,7 +45,7 @@ use voxlod_gpu::filtered::{FilteredKernel, GpuRecords};
 use voxlod_scene::{Camera, Image, Light, Scene};
 
 use crate::filtered::{EXACT, RES, cases};
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
 use crate::images::{ImageBound, compare};
 
 /// See the module docs.
@@ -145,7 +145,7 @@ impl Grid {
     }
 }
 
-pub fn vmesh_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn vmesh_scenes(backend: &Executor) -> Result<Measure, String> {
     let mut runs: Vec<(Grid, &'static str, Camera, Light, Options)> =
         cases().into_iter().map(|(n, c, l, o)| (Grid::Vmesh(0), n, c, l, o)).collect();
     let (_, camera, sun, options) = cases().remove(0);
@@ -155,19 +155,19 @@ pub fn vmesh_scenes(backend: &Backend) -> Result<Measure, String> {
     scenes_body(backend, Grid::Vmesh(0), runs)
 }
 
-pub fn adaptive_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn adaptive_scenes(backend: &Executor) -> Result<Measure, String> {
     let runs = cases().into_iter().map(|(n, c, l, o)| (Grid::Adaptive, n, c, l, o)).collect();
     scenes_body(backend, Grid::Adaptive, runs)
 }
 
 fn scenes_body(
-    backend: &Backend,
+    backend: &Executor,
     main: Grid,
     runs: Vec<(Grid, &'static str, Camera, Light, Options)>,
 ) -> Result<Measure, String> {
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let bg = Vec3::new(0.1, 0.2, 0.3);
     let mut measures = Vec::new();
@@ -288,23 +288,23 @@ fn bad_input(k: &FilteredKernel<'_>, grid: Grid) -> Result<Measure, String> {
     })
 }
 
-pub fn vmesh_property(backend: &Backend) -> Result<Measure, String> {
+pub fn vmesh_property(backend: &Executor) -> Result<Measure, String> {
     property(backend, &[Grid::Vmesh(0), Grid::Vmesh(1), Grid::Vmesh(2), Grid::Vmesh(3)])
 }
 
-pub fn adaptive_property(backend: &Backend) -> Result<Measure, String> {
+pub fn adaptive_property(backend: &Executor) -> Result<Measure, String> {
     property(backend, &[Grid::Adaptive])
 }
 
 /// Random cameras (direction, distance, field of view), light directions, shadows on/off and
 /// grids of `grids`, 32×32 pixels, each image within [`GPU_BOUND`] (`PROPTEST_CASES` sets how
 /// many; 24 by default). CPU row: cached equals uncached, bit for bit.
-fn property(backend: &Backend, grids: &[Grid]) -> Result<Measure, String> {
+fn property(backend: &Executor, grids: &[Grid]) -> Result<Measure, String> {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
     let kernel = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
+        Executor::Cpu => None,
+        Executor::Gpu(ctx) => Some(FilteredKernel::new(ctx).map_err(|e| e.to_string())?),
     };
     let f = fixture();
     let uploaded = match &kernel {
@@ -313,7 +313,7 @@ fn property(backend: &Backend, grids: &[Grid]) -> Result<Measure, String> {
     };
     let cases = std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
     let mut runner = TestRunner::new_with_rng(
-        Config { cases, ..Config::default() },
+        Config { cases, failure_persistence: None, ..Config::default() },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     );
     let v3 = || (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0);

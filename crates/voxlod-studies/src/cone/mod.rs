@@ -18,14 +18,17 @@
 //! readback), on lavapipe CPU times of the GPU path. The G-buffer, the references, the octrees,
 //! the leak experiment and the LOD part stay on the CPU.
 
+mod images;
+mod leak;
 pub mod lod;
+mod report;
 
 use std::time::Instant;
 
-use glam::{UVec3, Vec3, Vec4};
+use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
-use voxlod_cone::{ConeMedium, ConeTracer, Light, RadiancePayload, Shadows, TraceOptions, inject};
+use voxlod_cone::{ConeMedium, ConeTracer, RadiancePayload, Shadows, TraceOptions, inject};
 use voxlod_cpu::appearance::averages;
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
@@ -33,18 +36,18 @@ use voxlod_cpu::raycast::Bvh;
 use voxlod_cpu::render::ground_truth::{self, GBuffer};
 use voxlod_cpu::render::indirect;
 use voxlod_cpu::voxelize;
-use voxlod_eval::error_heatmap;
 use voxlod_eval::npy::FloatArray;
-use voxlod_eval::report::{
-    Cell, Column, ImageGrid, LabeledImage, NumberFormat, Plot, Report, Series, Table,
-};
+use voxlod_eval::report::LabeledImage;
 use voxlod_format::GridSpec;
 use voxlod_gpu::cone::{ConeKernel, ConeQuery, GpuConeOctree, GpuMedium, ShadingPoint};
 use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree};
-use voxlod_scene::{Image, Srgb8Image};
+use voxlod_scene::Srgb8Image;
 
 use crate::Error;
 use crate::backend::Backend;
+use images::{Best, Traced, colour, gray, reference_outputs};
+pub use leak::LeakRow;
+use leak::leak_experiment;
 pub use lod::{LodConfig, LodResult, LodRow};
 
 /// What the cone study measures. [`ConeConfig::quick`] is `voxlod cone builtin:cornell` with its
@@ -172,21 +175,6 @@ pub struct ConeRow {
     pub steps_per_pixel: f64,
 }
 
-/// One light-leaking measurement.
-#[derive(Clone, Debug, Serialize)]
-pub struct LeakRow {
-    /// Octree depth (grid of 2^depth voxels over the unit cube).
-    pub depth: u32,
-    /// Wall thickness in voxels (1/32 of the scene).
-    pub wall_voxels: u32,
-    /// "isotropic" or "directional".
-    pub option: String,
-    /// Step fraction.
-    pub step: f32,
-    /// Receiver's `E/π` with the wall divided by without it (truth: 0).
-    pub leak: f64,
-}
-
 /// One octree of the sweep (per resolution).
 #[derive(Clone, Debug, Serialize)]
 pub struct OctreeRow {
@@ -253,44 +241,6 @@ pub struct BestRows {
     pub ao: Option<String>,
     /// Lowest indirect MSE.
     pub indirect: Option<String>,
-}
-
-/// One cone-traced image of the sweep, per pixel: AO, and `E/π` (before the albedo).
-struct Traced {
-    ao: Vec<f32>,
-    irradiance: Vec<Vec3>,
-}
-
-/// The best row of the sweep for one target so far: its MSE, label and image.
-struct Best {
-    mse: f64,
-    label: String,
-    traced: Traced,
-}
-
-impl Best {
-    fn keep(best: &mut Option<Best>, mse: f64, label: impl Fn() -> String, traced: &Traced) {
-        if best.as_ref().is_none_or(|b| mse < b.mse) {
-            let traced = Traced { ao: traced.ao.clone(), irradiance: traced.irradiance.clone() };
-            *best = Some(Best { mse, label: label(), traced });
-        }
-    }
-}
-
-fn gray(gb: &GBuffer, v: &[f32]) -> Srgb8Image {
-    let mut img = Image::new(gb.width, gb.height, Vec4::ZERO);
-    for (p, &a) in img.pixels.iter_mut().zip(v) {
-        *p = Vec3::splat(a).extend(1.0);
-    }
-    img.to_srgb8()
-}
-
-fn colour(gb: &GBuffer, e: &[Vec3]) -> Srgb8Image {
-    let mut img = Image::new(gb.width, gb.height, Vec4::ZERO);
-    for ((p, &e), t) in img.pixels.iter_mut().zip(e).zip(&gb.texels) {
-        *p = (t.albedo * e).extend(1.0);
-    }
-    img.to_srgb8()
 }
 
 fn ms(t: Instant) -> f64 {
@@ -424,52 +374,6 @@ pub fn run(
     })
 }
 
-/// The references, the best AO row's and the best indirect row's images with their per-pixel
-/// error heat maps (8-bit sRGB), and the same in linear float: AO as `[height, width]`,
-/// `albedo · E/π` as `[height, width, 3]`.
-fn reference_outputs(
-    gb: &GBuffer,
-    ao_ref: &[f32],
-    ind_ref: &[Vec3],
-    best_ao: Option<Best>,
-    best_indirect: Option<Best>,
-) -> Result<(Vec<LabeledImage>, Vec<FloatArray>), Error> {
-    let (w, h) = (gb.width as usize, gb.height as usize);
-    let outgoing = |e: &[Vec3]| -> Vec<f32> {
-        e.iter().zip(&gb.texels).flat_map(|(e, t)| (t.albedo * *e).to_array()).collect()
-    };
-    let gray_array = |name: &str, v: &[f32]| FloatArray {
-        name: name.into(),
-        shape: vec![h, w],
-        data: v.to_vec(),
-    };
-    let rgb_array = |name: &str, e: &[Vec3]| FloatArray {
-        name: name.into(),
-        shape: vec![h, w, 3],
-        data: outgoing(e),
-    };
-    let (ao_img, ind_img) = (gray(gb, ao_ref), colour(gb, ind_ref));
-    // Labels stay short (they are drawn inside images as small as 16 px); the caption names
-    // the rows.
-    let mut images = vec![LabeledImage::new("AO ref", ao_img.clone())];
-    let mut arrays = vec![gray_array("ao_reference", ao_ref)];
-    if let Some(b) = best_ao {
-        let img = gray(gb, &b.traced.ao);
-        images.push(LabeledImage::new("AO best", img.clone()));
-        images.push(LabeledImage::new("AO err", error_heatmap(&img, &ao_img, 0.25)?));
-        arrays.push(gray_array("ao_best", &b.traced.ao));
-    }
-    images.push(LabeledImage::new("ind ref", ind_img.clone()));
-    arrays.push(rgb_array("indirect_reference", ind_ref));
-    if let Some(b) = best_indirect {
-        let img = colour(gb, &b.traced.irradiance);
-        images.push(LabeledImage::new("ind best", img.clone()));
-        images.push(LabeledImage::new("ind err", error_heatmap(&img, &ind_img, 0.25)?));
-        arrays.push(rgb_array("indirect_best", &b.traced.irradiance));
-    }
-    Ok((images, arrays))
-}
-
 /// The two opacity pre-filters measured: the mean of the eight children (one opacity) and six
 /// directional opacities composited front to back along each axis.
 const OPACITIES: [&str; 2] = ["isotropic", "directional"];
@@ -557,245 +461,4 @@ fn measure<M: ConeMedium + GpuMedium + Sync>(
         steps_per_pixel: steps as f64 / gb.texels.len() as f64,
     };
     Ok((row, Traced { ao, irradiance: e }))
-}
-
-/// The wall scene over the unit cube at `2^depth` voxels: a floor (y = 0 layer) on `x < ½`,
-/// lit from straight above, and a wall `x ∈ [½, ½ + 1/32)` across the whole cube (if `wall`);
-/// its faces are vertical, so unlit. The receiver at `(¾, ¼, ½)` faces −x: it sees only the
-/// wall's unlit face (truth 0), or the lit floor without the wall.
-fn wall_scene(depth: u32, wall: bool) -> Result<Octree<AveragePayload>, Error> {
-    let n = 1u32 << depth;
-    let grid = GridSpec::new(glam::DVec3::ZERO, 1.0 / n as f64, UVec3::splat(n))?;
-    let thick = (n / 32).max(1);
-    let mut v = Vec::new();
-    for x in 0..n / 2 {
-        for z in 0..n {
-            v.push((UVec3::new(x, 0, z), AveragePayload::new(Vec3::ONE, Vec3::Y, 1.0)));
-        }
-    }
-    if wall {
-        for x in n / 2..n / 2 + thick {
-            let normal = if x == n / 2 { Vec3::NEG_X } else { Vec3::X };
-            for y in 0..n {
-                for z in 0..n {
-                    v.push((UVec3::new(x, y, z), AveragePayload::new(Vec3::ONE, normal, 1.0)));
-                }
-            }
-        }
-    }
-    Ok(Octree::build(grid, v, &BuildOptions { depth: Some(depth), dense_log2: 4.min(depth) })?)
-}
-
-fn leak_experiment(depths: &[u32], steps: &[f32]) -> Result<Vec<LeakRow>, Error> {
-    let light =
-        Light::Directional { to_light: Vec3::Y, irradiance: Vec3::splat(std::f32::consts::PI) };
-    let p = Vec3::new(0.75, 0.25, 0.5);
-    let mut rows = Vec::new();
-    for &depth in depths {
-        let with = wall_scene(depth, true)?;
-        let without = wall_scene(depth, false)?;
-        for &step in steps {
-            let o = TraceOptions { step_factor: step, ..TraceOptions::default() };
-            let e = |t: &Octree<AveragePayload>, directional: bool| -> Result<f64, Error> {
-                Ok(if directional {
-                    let r: Octree<Directional<RadiancePayload>> =
-                        inject(t, &light, &Shadows::None)?;
-                    ConeTracer::new(&r, o)?.diffuse(p, Vec3::NEG_X).x as f64
-                } else {
-                    let r: Octree<RadiancePayload> = inject(t, &light, &Shadows::None)?;
-                    ConeTracer::new(&r, o)?.diffuse(p, Vec3::NEG_X).x as f64
-                })
-            };
-            for (name, directional) in [("isotropic", false), ("directional", true)] {
-                let open = e(&without, directional)?;
-                let leak = if open > 0.0 { e(&with, directional)? / open } else { f64::NAN };
-                rows.push(LeakRow {
-                    depth,
-                    wall_voxels: ((1u32 << depth) / 32).max(1),
-                    option: name.into(),
-                    step,
-                    leak,
-                });
-            }
-        }
-    }
-    Ok(rows)
-}
-
-impl ConeResult {
-    /// The sweep's table, the leak table and (with the LOD part) its table.
-    pub fn tables(&self) -> Result<Vec<Table>, Error> {
-        let o = self;
-        let num = |n: &str, f| Column::number(n, f);
-        let mut t = Table::new(
-            "cone tracing vs ray-traced references",
-            vec![
-                num("res", NumberFormat::Integer),
-                num("depth", NumberFormat::Integer),
-                Column::text("opacity"),
-                num("cones", NumberFormat::Integer),
-                num("aperture°", NumberFormat::Fixed(0)),
-                num("step", NumberFormat::Fixed(2)),
-                num("AO MSE", NumberFormat::Significant(3)),
-                num("AO SSIM", NumberFormat::Fixed(3)),
-                num("indirect MSE", NumberFormat::Significant(3)),
-                num("indirect SSIM", NumberFormat::Fixed(3)),
-                num("trace ms", NumberFormat::Significant(3)),
-                num("samples/px", NumberFormat::Significant(3)),
-            ],
-        );
-        for r in &o.rows {
-            let mut cells: Vec<Cell> =
-                [r.resolution as f64, r.depth as f64].into_iter().map(Cell::Number).collect();
-            cells.push(Cell::Text(r.opacity.clone()));
-            cells.extend(
-                [
-                    r.cones as f64,
-                    r.aperture_deg as f64,
-                    r.step as f64,
-                    r.ao_mse,
-                    r.ao_ssim,
-                    r.indirect_mse,
-                    r.indirect_ssim,
-                    r.trace_ms,
-                    r.steps_per_pixel,
-                ]
-                .into_iter()
-                .map(Cell::Number),
-            );
-            t.push_row(cells)?;
-        }
-        let mut l = Table::new(
-            "light leaking through a wall 1/32 of the scene thick (truth 0)",
-            vec![
-                num("depth", NumberFormat::Integer),
-                num("wall voxels", NumberFormat::Integer),
-                Column::text("opacity"),
-                num("step", NumberFormat::Fixed(2)),
-                num("leaked fraction", NumberFormat::Significant(3)),
-            ],
-        );
-        for r in &o.leaks {
-            l.push_row(vec![
-                Cell::Number(r.depth as f64),
-                Cell::Number(r.wall_voxels as f64),
-                Cell::Text(r.option.clone()),
-                Cell::Number(r.step as f64),
-                Cell::Number(r.leak),
-            ])?;
-        }
-        let mut out = vec![t, l];
-        if let Some(p) = &o.lod {
-            out.push(p.table()?);
-        }
-        Ok(out)
-    }
-
-    /// Appends the cone-tracing section (heading, references, tables, error-vs-time plots).
-    pub fn add_to_report(&self, r: &mut Report) -> Result<(), Error> {
-        let o = self;
-        r.heading(2, format!("Voxel cone tracing: {}", o.scene));
-        r.text(format!(
-        "References: ray-traced AO and one-bounce path-traced diffuse indirect light on the mesh \
-         ({:.0} ms and {:.0} ms, CPU). Their own error against the converged truth, estimated \
-         as half the MSE between two independent seeds: AO {:.2e}, indirect {:.2e}; errors \
-         below these are not resolved. Octrees (res, voxels, bytes/voxel, \
-         build ms, injection ms): {}. Cones traced on {}. Times are wall-clock times on a \
-         shared machine (on a CPU adapter such as lavapipe, CPU times of the GPU path).",
-        o.reference_ms.ao,
-        o.reference_ms.indirect,
-        o.reference_error_mse.ao,
-        o.reference_error_mse.indirect,
-        o.octrees
-            .iter()
-            .map(|t| format!(
-                "{}³: {} voxels, {:.1} B, {:.0} ms, {:.0} ms",
-                t.resolution, t.voxels, t.bytes_per_voxel, t.build_ms, t.inject_ms
-            ))
-            .collect::<Vec<_>>()
-            .join("; "),
-        o.backend
-    ));
-        for t in o.tables()? {
-            r.table(t);
-        }
-        if !o.images.is_empty() {
-            r.images(
-                "cone_references",
-                format!(
-                    "the ray-traced references, the sweep's best AO row ({}) and best indirect \
-                     row ({}), and their per-pixel errors (heat maps: full scale 0.25)",
-                    o.best_rows.ao.as_deref().unwrap_or("none"),
-                    o.best_rows.indirect.as_deref().unwrap_or("none")
-                ),
-                ImageGrid::new(3, o.images.clone()),
-            );
-            r.data(
-                "cone_reference_data",
-                "the same images in linear float: AO [height, width]; albedo · E/π [height, \
-                 width, 3]",
-                o.arrays.clone(),
-            );
-        }
-        if let Some(p) = &o.lod {
-            r.text(p.summary());
-            r.images(
-                "cone_lod_images",
-                format!("{}: the mesh and the LOD march at each bias", p.scene),
-                p.image_grid(),
-            );
-        }
-        let mut keys: Vec<(u32, u32, &str)> = o
-            .rows
-            .iter()
-            .map(|x| (x.resolution, x.aperture_deg as u32, x.opacity.as_str()))
-            .collect();
-        keys.sort();
-        keys.dedup();
-        let series = |metric: fn(&ConeRow) -> f64| -> Vec<Series> {
-            keys.iter()
-                .map(|&(res, ap, opacity)| {
-                    let pts = o
-                        .rows
-                        .iter()
-                        .filter(|x| {
-                            x.resolution == res
-                                && x.aperture_deg as u32 == ap
-                                && x.opacity == opacity
-                        })
-                        .map(|x| (x.trace_ms, metric(x)))
-                        .collect();
-                    Series::new(format!("{res}³, {ap}°, {opacity}"), pts)
-                })
-                .collect()
-        };
-        for (name, title, y_label, metric) in [
-            (
-                "cone_ao_error_vs_time",
-                "AO error vs cone tracing time",
-                "AO MSE (8-bit sRGB)",
-                (|x: &ConeRow| x.ao_mse) as fn(&ConeRow) -> f64,
-            ),
-            (
-                "cone_indirect_error_vs_time",
-                "indirect light error vs cone tracing time",
-                "indirect MSE (8-bit sRGB)",
-                |x: &ConeRow| x.indirect_mse,
-            ),
-        ] {
-            r.plot(
-                name,
-                Plot {
-                    title: title.into(),
-                    x_label: "trace time (ms, CPU)".into(),
-                    y_label: y_label.into(),
-                    log_x: true,
-                    log_y: true,
-                    series: series(metric),
-                    ..Plot::default()
-                },
-            );
-        }
-        Ok(())
-    }
 }

@@ -26,8 +26,9 @@ fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLay
     }
 }
 
-/// Storage buffers the passes bind at once (one layout for the three).
-const STORAGE_BUFFERS: u32 = 8;
+/// Storage buffers the passes bind at once (one layout for the three), the parameters included
+/// (see [`Context::uniform`]).
+const STORAGE_BUFFERS: u32 = 9;
 
 impl Passes {
     fn new(ctx: &Context) -> Result<Self> {
@@ -44,7 +45,7 @@ impl Passes {
         let ro = Storage { read_only: true };
         let rw = Storage { read_only: false };
         let entries = [
-            layout_entry(0, Uniform),
+            layout_entry(0, ro),
             layout_entry(1, ro),
             layout_entry(2, ro),
             layout_entry(3, ro),

@@ -53,21 +53,24 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::rc::Rc;
 
-use glam::{DVec3, UVec3, Vec2, Vec3, Vec4};
-use voxlod_cpu::appearance::line_sampler::{
-    SamplingContext, blend_key, dimension_base, sample_line,
-};
+use glam::{UVec3, Vec3};
+use voxlod_cpu::appearance::line_sampler::{SamplingContext, dimension_base, sample_line};
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::voxel_samples::{RaySample, SurfaceSample, VoxelSamples};
+use voxlod_cpu::appearance::voxel_samples::VoxelSamples;
 use voxlod_cpu::appearance::{AppearanceGrid, averages, subgrid};
-use voxlod_cpu::random::rand_f32;
 use voxlod_cpu::voxelize::{Options, Voxelization, voxelize};
 use voxlod_format::GridSpec;
 use voxlod_format::records::AverageRecord;
 use voxlod_gpu::precompute::{LineCase, Outputs, Precomputer};
-use voxlod_scene::{AlphaMode, Geometry, Material, Mesh, Scene};
+use voxlod_scene::{Geometry, Scene};
 
-use crate::harness::{Backend, Measure};
+use crate::harness::{Executor, Measure};
+
+mod oracle;
+mod scenes;
+
+use oracle::oracle;
+use scenes::{leaf, perturbed, property_cases, scene_cases};
 
 /// See the module docs.
 const LINE_BOUND: f64 = 1e-3;
@@ -102,151 +105,11 @@ fn record_at(g: &AppearanceGrid<AverageRecord>, c: UVec3) -> Option<AverageRecor
     g.records.index_of(c).map(|i| g.records.values()[i])
 }
 
-/// Whether the oracle counts a hit at barycentrics `(u, v)` on triangle `tri` of material
-/// `material` for line `ray` of voxel `id` (the sampler's alpha rules, on `scene`'s materials:
-/// `Mask` where the alpha at the interpolated UV is > 0, `Blend` where the line's blend number
-/// is below it).
-#[allow(clippy::too_many_arguments)]
-fn oracle_accepts(
-    scene: &Scene,
-    geometry: &Geometry,
-    tri: u32,
-    u: f64,
-    v: f64,
-    id: u32,
-    ray: u32,
-    seed: u32,
-) -> bool {
-    let material = geometry.materials[tri as usize];
-    let mode = scene.materials[material as usize].alpha_mode;
-    if mode == AlphaMode::Opaque {
-        return true;
-    }
-    let (_, uv) = geometry.interpolate(tri as usize, u as f32, v as f32);
-    let alpha = scene.material_sample(material, uv).alpha;
-    match mode {
-        AlphaMode::Blend => rand_f32(id, ray, blend_key(seed) ^ tri) < alpha,
-        _ => alpha > 0.0,
-    }
-}
-
-/// The oracle's lines of one voxel (module docs), with `scene`'s materials.
-fn oracle_voxel(
-    c: &Case,
-    scene: &Scene,
-    i: usize,
-    seed: u32,
-) -> (VoxelSamples, Vec<(LineCase, u32)>) {
-    let grid = &c.vox.grid;
-    let coord = c.vox.voxels.coords().nth(i).expect("voxel");
-    let min = grid.voxel_min(coord);
-    let inv = 1.0 / grid.voxel_size;
-    let local = |p: Vec3| (p.as_dvec3() - min) * inv;
-    let d = grid.dims;
-    let id =
-        coord.x.wrapping_add(d.x.wrapping_mul(coord.y.wrapping_add(d.y.wrapping_mul(coord.z))));
-    let tris: Vec<_> = c
-        .vox
-        .triangles_of(i)
-        .iter()
-        .filter_map(|&t| {
-            let [a, b, cc] = c.geometry.triangle(t as usize);
-            let (la, lb, lc) = (local(a), local(b), local(cc));
-            let (e1, e2) = (lb - la, lc - la);
-            let area2 = e1.cross(e2).length_squared();
-            (area2 > 0.0).then_some((t, la, lb, lc, (b - a).cross(cc - a).as_dvec3()))
-        })
-        .collect();
-    let mut samples = VoxelSamples::default();
-    let mut cases = Vec::new();
-    for r in 0..c.opts.rays {
-        let (dir, entry, chord) = sample_line(id, r, dimension_base(seed));
-        let (e, dd) = (entry.as_dvec3(), dir.as_dvec3());
-        let mut best: Option<(f64, f64, f64, usize)> = None;
-        for (k, &(tri, a, b, cc, _)) in tris.iter().enumerate() {
-            let (e1, e2) = (b - a, cc - a);
-            let p = dd.cross(e2);
-            let det = e1.dot(p);
-            if det == 0.0 {
-                continue;
-            }
-            let inv_det = 1.0 / det;
-            let tv = e - a;
-            let u = tv.dot(p) * inv_det;
-            let q = tv.cross(e1);
-            let v = dd.dot(q) * inv_det;
-            let t = e2.dot(q) * inv_det;
-            // The closest accepted hit: a hit the alpha rejects does not occlude.
-            if u >= 0.0
-                && v >= 0.0
-                && u + v <= 1.0
-                && best.is_none_or(|bt| t < bt.0)
-                && oracle_accepts(scene, &c.geometry, tri, u, v, id, r, seed)
-            {
-                best = Some((t, u, v, k));
-            }
-        }
-        let mut ray = RaySample { dir, entry, chord, occluded: false, surface: None };
-        let mut result = (LineCase::Miss, u32::MAX);
-        if let Some((t, u, v, k)) = best {
-            let (tri, a, b, cc, ng) = tris[k];
-            ray.occluded = true;
-            result = (LineCase::Occluded, tri);
-            let mut p = e + dd * t;
-            // The voxel-face tie rule is defined on the f32 local vertices (a triangle within
-            // f32 rounding of a voxel face lies on it): applied here the same way.
-            let (fa, fb, fc) = (a.as_vec3(), b.as_vec3(), cc.as_vec3());
-            for j in 0..3 {
-                if fa[j] == fb[j] && fa[j] == fc[j] {
-                    p[j] = fa[j] as f64;
-                }
-            }
-            let inside = p.cmpge(DVec3::ZERO).all() && p.cmple(DVec3::ONE).all();
-            let material = c.geometry.materials[tri as usize];
-            let ds = scene.materials[material as usize].double_sided;
-            let facing = ng.dot(dd);
-            if inside && (ds || facing < 0.0) {
-                let (mut normal, uv) = c.geometry.interpolate(tri as usize, u as f32, v as f32);
-                if ds && facing > 0.0 {
-                    normal = -normal;
-                }
-                let m = scene.material_sample(material, uv);
-                ray.surface = Some(SurfaceSample {
-                    point: p.as_vec3(),
-                    normal,
-                    albedo: m.albedo,
-                    specular: (m.specular.x + m.specular.y + m.specular.z) * (1.0 / 3.0),
-                    shininess: m.shininess,
-                });
-                result.0 = LineCase::Surface;
-            }
-        }
-        samples.rays.push(ray);
-        cases.push(result);
-    }
-    (samples, cases)
-}
-
-/// The oracle's answer for `c` with `scene`'s materials (the case's own, or a control's
-/// perturbed ones).
-fn oracle(c: &Case, scene: &Scene) -> Answer {
-    let n = c.vox.voxels.len();
-    let mut out =
-        Answer { lines: Vec::new(), records: Vec::new(), subgrids: Vec::new(), line_bits: None };
-    for i in 0..n {
-        let (s, cases) = oracle_voxel(c, scene, i, c.opts.seed);
-        out.records.push(averages::fit(&s));
-        out.subgrids.push(subgrid::build(&s));
-        out.lines.push(cases);
-    }
-    out
-}
-
 /// The backend's answer for `c` sampled with `seed`.
-fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
+fn run(backend: &Executor, c: &Case, seed: u32) -> Result<Answer, String> {
     let opts = PrecomputeOptions { seed, ..c.opts };
     match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             let ctx =
                 SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
             let grid = precompute(&ctx, &opts, averages::fit).map_err(|e| e.to_string())?;
@@ -271,7 +134,7 @@ fn run(backend: &Backend, c: &Case, seed: u32) -> Result<Answer, String> {
             }
             Ok(out)
         }
-        Backend::Gpu(ctx) => {
+        Executor::Gpu(ctx) => {
             let k = Precomputer::new(ctx).map_err(|e| e.to_string())?;
             let r = k
                 .run(&c.scene, &c.geometry, &c.vox, &opts, Outputs { lines: true })
@@ -394,237 +257,6 @@ fn compare(name: &str, a: &Answer, o: &Answer, compare_triangles: bool) -> Row {
     row
 }
 
-/// The forest's leaf: its alpha-masked, double-sided material (texture 0) and leaf texture.
-fn leaf() -> (Material, voxlod_scene::Texture) {
-    let forest = voxlod_scene::procedural::builtin(
-        "forest",
-        &[("trees", "1"), ("leaves", "1"), ("alpha", "true")],
-    )
-    .expect("the builtin forest builds");
-    let mut m = forest
-        .materials
-        .iter()
-        .find(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }))
-        .expect("the forest's leaf material is alpha-masked")
-        .clone();
-    m.base_color_texture = Some(voxlod_scene::TextureRef { texture: 0 });
-    (m, forest.textures[0].clone())
-}
-
-/// Two quads across the 8³ grid of half-unit voxels, both in the voxel layer z ∈ [1, 1.5]: in
-/// front (z = 1.15) material `front` (textured with `texture`, UVs 0..3: nine leaves across,
-/// each about two voxels), behind (z = 1.4) an opaque red one. Lines through what the front
-/// material's alpha rejects reach the red quad.
-fn layered(front: Material, texture: voxlod_scene::Texture) -> Scene {
-    let q = |z: f32, uv: f32, material| {
-        let p = [Vec3::new(0.3, 0.3, z), Vec3::new(3.7, 0.3, z), Vec3::new(3.7, 3.7, z)];
-        Mesh {
-            name: "quad".into(),
-            positions: vec![p[0], p[1], p[2], Vec3::new(0.3, 3.7, z)],
-            normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::new(uv, 0.0), Vec2::splat(uv), Vec2::new(0.0, uv)],
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-            material,
-            ..Default::default()
-        }
-    };
-    Scene {
-        meshes: vec![q(1.15, 3.0, 0), q(1.4, 1.0, 1)],
-        materials: vec![
-            front,
-            Material { base_color: Vec4::new(0.8, 0.1, 0.1, 1.0), ..Default::default() },
-        ],
-        textures: vec![texture],
-        ..Default::default()
-    }
-}
-
-/// Every texture shifted by one texel along u (texel x takes texel x + 1's value).
-fn shift_textures(scene: &Scene) -> Scene {
-    let mut s = scene.clone();
-    for t in &mut s.textures {
-        let (w, h) = (t.width as usize, t.height as usize);
-        let texels: Vec<[u8; 4]> =
-            (0..w * h).map(|i| t.texels[(i / w) * w + (i % w + 1) % w]).collect();
-        t.texels = std::sync::Arc::from(texels);
-    }
-    s
-}
-
-/// The material scenes' controls: each scene's materials perturbed on purpose (the oracle
-/// then samples the perturbed scene; the backend ran on the true one).
-fn perturbed(name: &str, scene: &Scene) -> Option<(Scene, &'static str)> {
-    let mut s = scene.clone();
-    match name {
-        "box-textured" => Some((shift_textures(scene), "texture shifted one texel")),
-        "leaf-mask" => {
-            for m in &mut s.materials {
-                m.alpha_mode = AlphaMode::Opaque;
-            }
-            Some((s, "alpha mask ignored"))
-        }
-        "leaf-blend" => {
-            for m in &mut s.materials {
-                if m.alpha_mode == AlphaMode::Blend {
-                    m.base_color.w -= 0.1;
-                }
-            }
-            Some((s, "blend alpha 0.7 → 0.6"))
-        }
-        _ => None,
-    }
-}
-
-fn quad(corners: [Vec3; 4], double_sided: bool, color: Vec3) -> Scene {
-    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize();
-    Scene {
-        meshes: vec![Mesh {
-            name: "quad".into(),
-            positions: corners.to_vec(),
-            normals: vec![n; 4],
-            uvs: vec![Vec2::ZERO; 4],
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-            material: 0,
-            ..Default::default()
-        }],
-        materials: vec![Material {
-            base_color: color.extend(1.0),
-            double_sided,
-            specular: Vec3::splat(0.3),
-            shininess: 32.0,
-            ..Default::default()
-        }],
-        ..Default::default()
-    }
-}
-
-fn scene_cases() -> Vec<Case> {
-    let bunny = Scene::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny/bunny.obj"),
-    )
-    .expect("the bunny asset loads");
-    let (lo, hi) = bunny.bounds().expect("bounds");
-    let bunny_grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 32).expect("grid");
-    let unit = GridSpec::new(DVec3::ZERO, 1.0, UVec3::splat(4)).expect("grid");
-    let face = [
-        Vec3::new(0.5, 0.5, 2.0),
-        Vec3::new(3.5, 0.5, 2.0),
-        Vec3::new(3.5, 3.5, 2.0),
-        Vec3::new(0.5, 3.5, 2.0),
-    ];
-    let tilted = [
-        Vec3::new(0.3, 0.2, 1.1),
-        Vec3::new(3.7, 0.4, 1.9),
-        Vec3::new(3.6, 3.8, 2.9),
-        Vec3::new(0.2, 3.5, 2.2),
-    ];
-    let opts = PrecomputeOptions::default();
-    let boxed = Scene::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../assets/BoxTextured/BoxTextured.glb"),
-    )
-    .expect("the BoxTextured asset loads");
-    assert!(!boxed.textures.is_empty(), "BoxTextured has its texture");
-    let (lo, hi) = boxed.bounds().expect("bounds");
-    let box_grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), 12).expect("grid");
-    let half = GridSpec::new(DVec3::ZERO, 0.5, UVec3::splat(8)).expect("grid");
-    let (leaf, texture) = leaf();
-    let blend = Material {
-        alpha_mode: AlphaMode::Blend,
-        base_color: leaf.base_color.truncate().extend(0.7),
-        ..leaf.clone()
-    };
-    let layered_opts = PrecomputeOptions { rays: 300, seed: 7 };
-    vec![
-        case("box-textured".into(), boxed, box_grid, opts),
-        case("leaf-mask".into(), layered(leaf, texture.clone()), half, layered_opts),
-        case("leaf-blend".into(), layered(blend, texture), half, layered_opts),
-        case("bunny-32".into(), bunny, bunny_grid, opts),
-        case("plane-on-face".into(), quad(face, false, Vec3::new(0.7, 0.2, 0.1)), unit, opts),
-        case(
-            "double-sided".into(),
-            quad(tilted, true, Vec3::new(0.1, 0.6, 0.3)),
-            unit,
-            PrecomputeOptions { rays: 200, seed: 3 },
-        ),
-    ]
-}
-
-/// Random soups in random grids (module docs), `count` cases from `seed`.
-fn property_cases(count: u32) -> Vec<Case> {
-    (0..count)
-        .map(|k| {
-            let r = |d: u32| rand_f32(0x9E37 + k, 11, d);
-            let dims = UVec3::new(
-                2 + (r(0) * 6.0) as u32,
-                2 + (r(1) * 6.0) as u32,
-                2 + (r(2) * 5.0) as u32,
-            );
-            let size = 0.1 + 1.9 * r(3) as f64;
-            let origin = (DVec3::new(r(4) as f64, r(5) as f64, r(6) as f64) - 0.5) * 20.0;
-            let grid = GridSpec::new(origin, size, dims).expect("grid");
-            let extent = dims.as_vec3() * size as f32;
-            let o = origin.as_vec3();
-            let tris = 1 + (r(7) * 30.0) as u32;
-            let mut positions = Vec::new();
-            for t in 0..tris {
-                let q = |d: u32| rand_f32(k * 1000 + t, 12, d);
-                let centre = o + Vec3::new(q(0), q(1), q(2)) * extent;
-                let scale = size as f32 * [0.3, 1.0, 3.0][(t % 3) as usize];
-                for v in 0..3 {
-                    let mut p = centre
-                        + (Vec3::new(q(3 + 3 * v), q(4 + 3 * v), q(5 + 3 * v)) - 0.5) * scale;
-                    if t % 4 == 0 {
-                        // On a voxel face: axis-aligned triangles at a grid plane.
-                        let z = ((centre.z - o.z) / size as f32).round() * size as f32 + o.z;
-                        p.z = z;
-                    }
-                    positions.push(p);
-                }
-            }
-            let normals: Vec<Vec3> = positions
-                .chunks(3)
-                .flat_map(|p| {
-                    let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
-                    [n, n, n]
-                })
-                .collect();
-            let n = positions.len();
-            let half = (tris / 2) as usize * 3;
-            let mesh = |range: std::ops::Range<usize>, material| Mesh {
-                name: "soup".into(),
-                positions: positions[range.clone()].to_vec(),
-                normals: normals[range.clone()].to_vec(),
-                uvs: vec![Vec2::ZERO; range.len()],
-                indices: (0..range.len() as u32 / 3)
-                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-                    .collect(),
-                material,
-                ..Default::default()
-            };
-            let mut meshes = vec![mesh(half..n, 1)];
-            if half > 0 {
-                meshes.insert(0, mesh(0..half, 0));
-            }
-            let scene = Scene {
-                meshes,
-                materials: vec![
-                    Material { base_color: Vec4::new(0.9, 0.5, 0.1, 1.0), ..Default::default() },
-                    Material {
-                        base_color: Vec4::new(0.2, 0.3, 0.9, 1.0),
-                        double_sided: true,
-                        ..Default::default()
-                    },
-                ],
-                ..Default::default()
-            };
-            let opts =
-                PrecomputeOptions { rays: 1 + (r(8) * 200.0) as u32, seed: (r(9) * 1000.0) as u32 };
-            case(format!("soup-{k}"), scene, grid, opts)
-        })
-        .collect()
-}
-
 /// Rows per (backend, case set): the lines and voxels rows share one run.
 type Cache = HashMap<(String, &'static str), Rc<Vec<Row>>>;
 
@@ -632,7 +264,7 @@ thread_local! {
     static CACHE: RefCell<Cache> = RefCell::default();
 }
 
-fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
+fn rows(backend: &Executor, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
     let key = (backend.name(), set);
     if let Some(r) = CACHE.with(|c| c.borrow().get(&key).cloned()) {
         return Ok(r);
@@ -644,10 +276,10 @@ fn rows(backend: &Backend, set: &'static str) -> Result<Rc<Vec<Row>>, String> {
         let o = oracle(c, &c.scene);
         let a = run(backend, c, c.opts.seed)?;
         // The CPU sampler reports no triangle: only its cases are compared.
-        let tri = matches!(backend, Backend::Gpu(_));
+        let tri = matches!(backend, Executor::Gpu(_));
         let mut row = compare(&c.name, &a, &o, tri);
-        if let Backend::Gpu(_) = backend {
-            let cpu = run(&Backend::Cpu, c, c.opts.seed)?;
+        if let Executor::Gpu(_) = backend {
+            let cpu = run(&Executor::Cpu, c, c.opts.seed)?;
             let direct = compare("gpu-vs-cpu", &a, &cpu, false);
             let (same, all) = a.line_bits.unwrap_or_default();
             row.note = format!(
@@ -755,19 +387,19 @@ fn voxels_measure(rows: &[Row]) -> Measure {
     Measure::combine(&measures)
 }
 
-pub fn lines_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn lines_scenes(backend: &Executor) -> Result<Measure, String> {
     Ok(lines_measure(&rows(backend, "scenes")?))
 }
 
-pub fn voxels_scenes(backend: &Backend) -> Result<Measure, String> {
+pub fn voxels_scenes(backend: &Executor) -> Result<Measure, String> {
     Ok(voxels_measure(&rows(backend, "scenes")?))
 }
 
-pub fn lines_property(backend: &Backend) -> Result<Measure, String> {
+pub fn lines_property(backend: &Executor) -> Result<Measure, String> {
     Ok(lines_measure(&rows(backend, "property")?))
 }
 
-pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
+pub fn voxels_property(backend: &Executor) -> Result<Measure, String> {
     Ok(voxels_measure(&rows(backend, "property")?))
 }
 
@@ -775,7 +407,7 @@ pub fn voxels_property(backend: &Backend) -> Result<Measure, String> {
 /// as one dispatch (GPU); the CPU driver on one thread gives the same bits as on the pool
 /// (CPU). Bad input: `rays = 0` gets the CPU's error word for word; a texture edge over
 /// [`voxlod_gpu::material::MAX_TEXTURE_EDGE`] gets an error with the numbers on the GPU. Exact.
-pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
+pub fn dispatches(backend: &Executor) -> Result<Measure, String> {
     // The bunny at 16³ with 64 lines: ~800 voxels, 22 dispatches of 37.
     let bunny = scene_cases().swap_remove(0).scene;
     let (lo, hi) = bunny.bounds().map_err(|e| e.to_string())?;
@@ -787,7 +419,7 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
     let ctx = SamplingContext::new(&c.scene, &c.geometry, &c.vox).map_err(|e| e.to_string())?;
     let cpu_err = precompute(&ctx, &zero, averages::fit).map(|_| ()).unwrap_err().to_string();
     match backend {
-        Backend::Cpu => {
+        Executor::Cpu => {
             let pool = precompute(&ctx, &c.opts, averages::fit).map_err(|e| e.to_string())?;
             let one = rayon::ThreadPoolBuilder::new()
                 .num_threads(1)
@@ -798,7 +430,7 @@ pub fn dispatches(backend: &Backend) -> Result<Measure, String> {
             bad += (pool.records.values() != one.records.values()) as usize;
             notes.push(format!("{} records, 1 thread vs pool", pool.records.len()));
         }
-        Backend::Gpu(gpu) => {
+        Executor::Gpu(gpu) => {
             let k = Precomputer::new(gpu).map_err(|e| e.to_string())?;
             let all = Outputs { lines: true };
             let base =
