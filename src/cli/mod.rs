@@ -266,7 +266,8 @@ pub struct ConeArgs {
 #[derive(Debug, Args)]
 pub struct HeitzNeyretArgs {
     /// The report's settings (256³, 256² pixels, zooms 1–16, 256 rays per pixel, 150 lines per
-    /// voxel, 3 timed runs); without it the quick preset (64³, 64², zooms 1, 4, 16).
+    /// voxel, 3 timed runs); without it the quick preset (128³, 128², zooms 1, 2, 4, 8, 64 rays
+    /// per pixel, 64 lines per voxel, 3 timed runs).
     #[arg(long)]
     pub full: bool,
     /// Scene specs (default: the preset's bumpy sphere, bumpy specular sphere, bunny and
