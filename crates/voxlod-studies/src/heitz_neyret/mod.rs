@@ -12,16 +12,18 @@
 //! coarser levels). Each render is compared with the ground truth of the mesh at that zoom
 //! (`ground_truth::render`, [`HeitzNeyretConfig::spp`] stratified rays per pixel, its own noise
 //! measured with a second seed). The methods ([`Method`]):
-//! - **masks**: [`DifferentialRenderer`] with coverage masks and Eq. 17's colour, shaded by
-//!   `voxlod_gpu::differential::shade_element` (voxlod-cpu's `shade`);
+//! - **masks**: [`DifferentialRenderer`](voxlod_cone::DifferentialRenderer) with coverage
+//!   masks and Eq. 17's colour, shaded by `voxlod_gpu::differential::shade_element`
+//!   (voxlod-cpu's `shade`);
 //! - **masks, mean colour**: the same without the colour's height correlation (`aₛ` ignored,
 //!   the colour filtered separately: what the paper calls MIP-mapping the colour);
 //! - **blending**: the same records and elements composited as if uncorrelated (Eq. 12), to
 //!   isolate what the masks change;
-//! - **Averages**, **Averages directional**: [`PrimaryRenderer`] on Averages octrees (isotropic
-//!   opacity, and six directional opacities), the existing alpha-blending baseline, shaded by
-//!   `shade` with the mean colour and normal and, for a scene of one material, that material's
-//!   own specular lobe (the unfiltered BRDF on the mean normal, as the paper's naive method).
+//! - **Averages**, **Averages directional**:
+//!   [`PrimaryRenderer`](voxlod_cone::PrimaryRenderer) on Averages octrees (isotropic opacity,
+//!   and six directional opacities), the existing alpha-blending baseline, shaded by `shade`
+//!   with the mean colour and normal and, for a scene of one material, that material's own
+//!   specular lobe (the unfiltered BRDF on the mean normal, as the paper's naive method).
 //!
 //! # Measures
 //! - MSE and SSIM against the ground truth (8-bit sRGB), and the ground truth's own error (half
@@ -33,9 +35,9 @@
 //!   about the scene's centre (`radial` cases): pixels the truth covers fully, binned by
 //!   `μ = |v·n|` with `n` the radial direction at the pixel's hit; per bin the mean linear
 //!   colour of the truth and of each method where it covers the pixel (the background it
-//!   composited taken out, so that coverage does not count twice), compared by chromaticity (`(r, g) = (R, G)/(R + G +
-//!   B)`: the hue shift the height-correlated colour causes, apart from the brightness the
-//!   lighting changes).
+//!   composited taken out, so that coverage does not count twice), compared by chromaticity
+//!   (`(r, g) = (R, G)/(R + G + B)`: the hue shift the height-correlated colour causes, apart
+//!   from the brightness the lighting changes).
 //! - **Cost**: elements (octree samples) per pixel of the primary and shadow cones, render time
 //!   (CPU, rayon; min and max over [`HeitzNeyretConfig::repeats`] runs); on
 //!   [`Backend::Gpu`] also the differential kernel's time (on lavapipe, CPU time of the GPU
