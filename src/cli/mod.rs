@@ -39,6 +39,10 @@ pub enum Command {
     /// Voxel cone tracing on a sparse voxel octree: AO and one-bounce indirect light against
     /// ray-traced references, over cone count × aperture × octree depth × step, and light leaking.
     Cone(ConeArgs),
+    /// Heitz–Neyret surface statistics with coverage masks against alpha blending over
+    /// distance: error against the mesh, silhouettes, colour at grazing angles, cost, bytes per
+    /// node.
+    HeitzNeyret(HeitzNeyretArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
     /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
@@ -259,6 +263,51 @@ pub struct ConeArgs {
     #[arg(short, long, default_value = "out/cone")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod heitz-neyret`.
+#[derive(Debug, Args)]
+pub struct HeitzNeyretArgs {
+    /// The report's settings (256³, 256² pixels, zooms 1–16, 256 rays per pixel, 150 lines per
+    /// voxel, 3 timed runs); without it the quick preset (128³, 128², zooms 1, 2, 4, 8, 64 rays
+    /// per pixel, 64 lines per voxel, 3 timed runs).
+    #[arg(long)]
+    pub full: bool,
+    /// Scene specs (default: the preset's bumpy sphere, bumpy specular sphere, bunny and
+    /// forest). A `builtin:bumpy-*` scene gets the grazing-colour measure (its macro-surface is
+    /// a sphere); `builtin:forest`, `island` and `blinds` are marked outside the model's domain.
+    pub scenes: Vec<String>,
+    /// Voxels along the longest axis (a power of two in 8..=1024); default: the preset's.
+    #[arg(long, value_parser = parse::octree_resolution)]
+    pub res: Option<u32>,
+    /// Image side in pixels (8..=2048); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=2048))]
+    pub size: Option<u32>,
+    /// Camera distance factors from the default framing (≥ 0.5), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = parse::f32_in(0.5, 1e6, false))]
+    pub zooms: Vec<f32>,
+    /// Rays per pixel of the ground truth; default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Sampling lines per voxel for the records (1..=4096); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub rays: Option<u32>,
+    /// Timed renders per method and zoom (1..=16); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub repeats: Option<u32>,
+    /// Skip the depth-of-field measure.
+    #[arg(long)]
+    pub no_dof: bool,
+    /// Where the coverage-mask renders also run (gpu: voxlod-gpu's differential kernel, timed
+    /// and compared with the CPU image; every other render stays on the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/heitz-neyret")]
+    pub output: PathBuf,
+    /// Print the result as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
 }

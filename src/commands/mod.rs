@@ -3,6 +3,7 @@
 
 mod compare;
 mod cone;
+mod heitz_neyret;
 mod info;
 mod render;
 mod report;
@@ -18,6 +19,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 pub use compare::compare;
 pub use cone::cone;
+pub use heitz_neyret::heitz_neyret;
 pub use info::info;
 pub use render::render;
 pub use report::report;

@@ -49,6 +49,7 @@
 //! | [`volume`] | procedural participating media with metavoxels (McNabb 2015, GPU Pro 6): attenuation models, metavoxel sizes, memory |
 //! | [`slicemap`] | slicemaps (Eisemann and Décoret 2006): holes against the exact voxelizers, transmittance shadow maps against ray-traced transmittance, the traversed volume for refraction against ray-cast intervals |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
+//! | [`heitz_neyret`] | Heitz and Neyret's (2012) pre-filtered surface statistics with coverage masks against alpha blending over distance: error, silhouettes, colour at grazing angles, cost, bytes per node |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
 //! cameras), [`spread`] (mean and range over views), [`alloc`] (peak heap memory per stage),
@@ -102,6 +103,7 @@ pub mod cone;
 mod error;
 pub mod filtered;
 mod ground_truths;
+pub mod heitz_neyret;
 pub mod machine;
 pub mod report;
 pub mod scenes;

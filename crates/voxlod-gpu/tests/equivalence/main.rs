@@ -2,9 +2,10 @@
 //!
 //! Modelled on wgpu's own test harness: kernel bodies ([`voxelize`], [`raycast`], [`random`],
 //! [`materials`], [`ground_truth`], [`filtered`], [`voxels`], [`octree`], [`precompute`],
-//! [`cone`], [`volume`], [`slicemap`]), each run on the CPU reference and then on every adapter
-//! wgpu finds, against the same oracle and the same stated tolerance; known driver problems are
-//! data ([`KNOWN_ISSUES`]: skip, or expect failure, with the reason), never `#[ignore]`.
+//! [`cone`], [`differential`], [`volume`], [`slicemap`]), each run on the CPU reference and
+//! then on every adapter wgpu finds, against the same oracle and the same stated tolerance;
+//! known driver problems are data ([`KNOWN_ISSUES`]: skip, or expect failure, with the
+//! reason), never `#[ignore]`.
 //!
 //! Each (kernel body × executor) is its own test, named `<kernel body> :: <executor>` (e.g.
 //! `octree build topology (scenes) :: llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`), so the
@@ -18,6 +19,7 @@
 //! not look green.
 
 mod cone;
+mod differential;
 mod filtered;
 mod ground_truth;
 mod harness;
@@ -80,6 +82,10 @@ const KERNELS: &[Kernel] = &[
     Kernel { name: "cone tracing (proptest)", body: cone::property },
     Kernel { name: "cone tracing (control)", body: cone::control },
     Kernel { name: "cone tracing (errors)", body: cone::errors },
+    Kernel { name: "differential cone tracing (scenes)", body: differential::scenes },
+    Kernel { name: "differential cone tracing (proptest)", body: differential::property },
+    Kernel { name: "differential cone tracing (control)", body: differential::control },
+    Kernel { name: "differential Smith f32 vs f64", body: differential::smith },
     Kernel { name: "volume binning (scenes)", body: volume::binning_scenes },
     Kernel { name: "volume fill (scenes)", body: volume::fill_scenes },
     Kernel { name: "volume propagation (scenes)", body: volume::propagation_scenes },

@@ -12,6 +12,8 @@ const SMALL: &[&str] = &[
     "forest?trees=2&leaves=200",
     "island?terrain=24&grass=500&rocks=2",
     "blinds?slats=16",
+    "bumpy-sphere?subdiv=2",
+    "bumpy-specular?subdiv=2",
     "cornell",
     "cube",
     "sphere?subdiv=1",
