@@ -44,12 +44,21 @@ pub enum Command {
     /// re-voxelizing them — agreement, exact rotations, flicker, time per frame against object
     /// count — and a frame sequence through the whole pipeline on either backend.
     Dynamic(DynamicArgs),
+    /// Heitz–Neyret surface statistics with coverage masks against alpha blending over
+    /// distance: error against the mesh, silhouettes, colour at grazing angles, cost, bytes per
+    /// node.
+    HeitzNeyret(HeitzNeyretArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
     /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
     /// with metavoxels, and measure its trade: attenuation models against the exact reference,
     /// time and memory per metavoxel size.
     Volume(VolumeArgs),
+    /// Slicemaps (bitmask voxelization by rasterization, Eisemann and Décoret 2006) of a scene:
+    /// holes against the exact voxelizers, transmittance shadow maps against ray-traced
+    /// transmittance, the traversed volume for refraction against ray-cast intervals; images
+    /// and error tables.
+    Slicemap(SlicemapArgs),
     /// List the builtin scenes and their parameters.
     Scenes,
 }
@@ -307,6 +316,51 @@ pub struct DynamicArgs {
     pub json: bool,
 }
 
+/// `voxlod heitz-neyret`.
+#[derive(Debug, Args)]
+pub struct HeitzNeyretArgs {
+    /// The report's settings (256³, 256² pixels, zooms 1–16, 256 rays per pixel, 150 lines per
+    /// voxel, 3 timed runs); without it the quick preset (128³, 128², zooms 1, 2, 4, 8, 64 rays
+    /// per pixel, 64 lines per voxel, 3 timed runs).
+    #[arg(long)]
+    pub full: bool,
+    /// Scene specs (default: the preset's bumpy sphere, bumpy specular sphere, bunny and
+    /// forest). A `builtin:bumpy-*` scene gets the grazing-colour measure (its macro-surface is
+    /// a sphere); `builtin:forest`, `island` and `blinds` are marked outside the model's domain.
+    pub scenes: Vec<String>,
+    /// Voxels along the longest axis (a power of two in 8..=1024); default: the preset's.
+    #[arg(long, value_parser = parse::octree_resolution)]
+    pub res: Option<u32>,
+    /// Image side in pixels (8..=2048); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=2048))]
+    pub size: Option<u32>,
+    /// Camera distance factors from the default framing (≥ 0.5), comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = parse::f32_in(0.5, 1e6, false))]
+    pub zooms: Vec<f32>,
+    /// Rays per pixel of the ground truth; default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Sampling lines per voxel for the records (1..=4096); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub rays: Option<u32>,
+    /// Timed renders per method and zoom (1..=16); default: the preset's.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub repeats: Option<u32>,
+    /// Skip the depth-of-field measure.
+    #[arg(long)]
+    pub no_dof: bool,
+    /// Where the coverage-mask renders also run (gpu: voxlod-gpu's differential kernel, timed
+    /// and compared with the CPU image; every other render stays on the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/heitz-neyret")]
+    pub output: PathBuf,
+    /// Print the result as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// `voxlod volume`.
 #[derive(Debug, Args)]
 pub struct VolumeArgs {
@@ -336,6 +390,57 @@ pub struct VolumeArgs {
     pub backend: BackendArg,
     /// Output directory.
     #[arg(short, long, default_value = "out/volume")]
+    pub output: PathBuf,
+    /// Print the rows as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `voxlod slicemap`.
+#[derive(Debug, Args)]
+pub struct SlicemapArgs {
+    /// Scene for every part: an .obj/.gltf/.glb file or builtin:NAME[?KEY=VALUE&...]
+    /// (`voxlod scenes`). Without it, the preset's scenes: holes on the bunny and a forest
+    /// (with `--full`, also the engine), shadows on the forest's leaves, refraction through the
+    /// closed bunny.
+    pub scene: Option<String>,
+    /// Paper-scale settings: 512² maps, up to 512 slices, larger images, three timed runs.
+    #[arg(long)]
+    pub full: bool,
+    /// Parts to run, comma-separated.
+    #[arg(long, default_value = "holes,shadows,refraction", value_delimiter = ',',
+          value_parser = clap::builder::PossibleValuesParser::new(["holes", "shadows", "refraction"]))]
+    pub parts: Vec<String>,
+    /// Slice counts (1..=512) of the perspective maps and of the refraction's front/back maps,
+    /// comma-separated (default: the preset's).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=512))]
+    pub slices: Vec<u32>,
+    /// Width in pixels of the shadow and refraction images (1..=4096; default: the preset's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub image: Option<u32>,
+    /// Voxels along the longest side of the grid the aligned maps are compared in (1..=512;
+    /// default: the preset's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=512))]
+    pub res: Option<u32>,
+    /// Columns per side of the perspective maps and of the light's maps (1..=4096; default:
+    /// the preset's). With it, the shadow maps are measured at this size for every slice
+    /// count of `--slices` (or 32, 96, 512).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub map_size: Option<u32>,
+    /// Substring of the names of semi-transparent materials for the shadow maps (when none
+    /// matches, every triangle is a semi-transparent layer).
+    #[arg(long, default_value = "leaves")]
+    pub transmissive: String,
+    /// Attenuation σ of one semi-transparent layer, in [0, 1].
+    #[arg(long, default_value_t = 0.3, value_parser = parse::f32_in(0.0, 1.0, false))]
+    pub sigma: f32,
+    /// Where the slicemaps are also built, for their time (gpu: voxlod-gpu's render pipeline;
+    /// every measured number comes from the CPU reference, which the equivalence suite shows
+    /// equal).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    pub backend: BackendArg,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/slicemap")]
     pub output: PathBuf,
     /// Print the rows as JSON instead of tables.
     #[arg(long)]

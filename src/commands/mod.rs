@@ -4,9 +4,11 @@
 mod compare;
 mod cone;
 mod dynamic;
+mod heitz_neyret;
 mod info;
 mod render;
 mod report;
+mod slicemap;
 mod volume;
 mod voxelize;
 
@@ -19,9 +21,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub use compare::compare;
 pub use cone::cone;
 pub use dynamic::dynamic;
+pub use heitz_neyret::heitz_neyret;
 pub use info::info;
 pub use render::render;
 pub use report::report;
+pub use slicemap::slicemap;
 pub use volume::volume;
 pub use voxelize::voxelize;
 

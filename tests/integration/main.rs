@@ -3,7 +3,9 @@
 mod cli;
 mod cone;
 mod dynamic;
+mod heitz_neyret;
 mod scene_files;
+mod slicemap;
 mod volume;
 
 /// The `result` of a `--json` output, after checking the envelope every command shares

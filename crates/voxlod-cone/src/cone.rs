@@ -78,7 +78,7 @@ pub struct ConeResult {
 
 /// Parameter interval `[t0, t1]` where `o + t·d` lies inside the box `[lo, hi]³` (empty if
 /// `t0 > t1`).
-fn slab(o: Vec3, d: Vec3, lo: f32, hi: f32) -> (f32, f32) {
+pub(crate) fn slab(o: Vec3, d: Vec3, lo: f32, hi: f32) -> (f32, f32) {
     let inv = d.recip();
     let a = (Vec3::splat(lo) - o) * inv;
     let b = (Vec3::splat(hi) - o) * inv;

@@ -54,6 +54,7 @@
 //! | [`tracer`] | [`ConeTracer`]: AO, diffuse and specular cones from a shading point; self-occlusion offsets |
 //! | [`primary`] | [`PrimaryRenderer`]: primary visibility, one pixel-wide cone per pixel, level of detail by distance, shaded samples |
 //! | [`dynamic`] | [`FramePipeline`]: a dynamic scene's frame — transform the cached voxels, rebuild the octree, re-inject the light (skipped when nothing moved) |
+//! | [`differential`] | [`DifferentialRenderer`]: Heitz and Neyret's (2012) differential cone tracing of a `MicrosurfacePayload` octree with coverage masks, view- and light-dependent colour, depth of field |
 //!
 //! Shadows at injection are either marched through the geometry octree itself or given per leaf
 //! by the caller ([`Shadows`]). The ray-traced references these estimates are measured against
@@ -84,8 +85,8 @@
 //! - Injected radiance is Lambertian; one directional or point light, no emissive surfaces or
 //!   environment light.
 //! - No GPU: voxlod-gpu's `cone` module traces the AO, diffuse and specular cones and is checked
-//!   against [`ConeTracer`] by its equivalence suite; injection and primary visibility run here.
-//! - Not Heitz and Neyret's (2012) differential cone tracing.
+//!   against [`ConeTracer`] by its equivalence suite, and its `differential` module runs
+//!   [`DifferentialRenderer`]'s march; injection and [`PrimaryRenderer`] run here.
 //!
 //! It depends on voxlod-octree and voxlod-format only (no BVH, no scene crate, no GPU API).
 //!
@@ -95,10 +96,13 @@
 //! - Crassin, Neyret, Sainz, Green, Eisemann 2011, "Interactive Indirect Illumination Using
 //!   Voxel Cone Tracing", Pacific Graphics: [`inject()`], [`cone`], [`tracer`], directional
 //!   opacities.
+//! - Heitz, Neyret 2012, "Representing Appearance and Pre-filtering Subpixel Data in Sparse
+//!   Voxel Octrees", High Performance Graphics: [`differential`].
 
 #![deny(missing_docs)]
 
 pub mod cone;
+pub mod differential;
 pub mod dynamic;
 mod error;
 pub mod inject;
@@ -107,6 +111,10 @@ pub mod primary;
 pub mod tracer;
 
 pub use cone::{Cone, ConeResult, March, SampleInfo, falloff, trace, trace_shaded};
+pub use differential::{
+    Compositing, DepthOfField, DifferentialImage, DifferentialOptions, DifferentialPixel,
+    DifferentialRenderer, FrameConstants, SurfaceShadeInput,
+};
 pub use dynamic::{FramePipeline, FrameReport};
 pub use error::{Error, Result};
 pub use inject::{InjectionCache, Light, Shadows, inject, occupied_leaves};

@@ -1,5 +1,6 @@
 //! voxlod's GPU backend on wgpu: a [`Context`] that picks an adapter and guards every
-//! allocation and dispatch, and WGSL compute kernels that mirror the CPU references of
+//! allocation and dispatch, and WGSL kernels (compute, and one render pipeline) that mirror the
+//! CPU references of
 //! [`voxlod_cpu`], [`voxlod_octree`] and [`voxlod_cone`]. Each kernel is checked against its
 //! reference by the crate's equivalence suite (`tests/equivalence`, run on every adapter found)
 //! with a stated tolerance.
@@ -58,7 +59,9 @@
 //! | [`octree`] | sparse voxel octree build, Averages pre-filter | [`voxlod_octree`] | exact topology; payloads within `8·depth·2⁻²⁴` |
 //! | [`cone`] | cone tracing (AO, diffuse, specular) | [`voxlod_cone::ConeTracer`] | within 1e-3 for 99 % of points |
 //! | [`dynamic`] | a dynamic scene's frame: voxel transformation, fixed-point blend, octree rebuild, light injection | [`voxlod_octree::dynamic`], [`voxlod_cone::inject()`] | cells exact but within 10⁻⁴ voxel of a boundary (≤ 0.1 %); sums and topology exact; radiance within 1e-3 for 99 % |
+//! | [`differential`] | Heitz–Neyret differential cone tracing with coverage masks; its `f32` Smith functions | [`voxlod_cone::DifferentialRenderer`] with [`differential::shade_element`]; `f64` Λ and erfc | 2 sRGB steps, 98 % of pixels, same element counts; Λ within 1e-4 relative |
 //! | [`volume`] | metavoxel binning, fill, propagation, march | [`voxlod_cpu::volume`] | binning exact; values 1e-5 / 1e-4 relative; image 1 sRGB step |
+//! | [`slicemap`] | slicemaps by rasterization (a render pipeline: vertex + fragment stages, fragment-stage `atomicOr`), their occluder and inner-voxel queries | [`voxlod_cpu::voxelize::slicemap`] | columns exact; slice bits but at fragments within 1e-5 of a slice boundary; queries exact |
 //!
 //! Each module's documentation states why its bound is what it is (which WGSL operations are
 //! less accurate than Rust's, where a fused multiply-add can move a tie) and what a real GPU
@@ -77,7 +80,8 @@
 //!   mesh shadow; the precompute's sampling context and its `f64` set-up of each voxel's
 //!   triangles, and the Averages fit's arithmetic on the read-back sums; the filtered and
 //!   ground-truth renderers' frame and option checks and random-stream keys; the volume's
-//!   input checks, particle preparation, culling and memory budget;
+//!   input checks, particle preparation, culling and memory budget; the slicemap's view
+//!   transform, clipping and sub-pixel snapping of the triangles;
 //! - from voxlod-octree: the build plan (depth, dense levels), the payload checks and the
 //!   flat layout ([`voxlod_octree::FlatOctree`], [`voxlod_octree::GpuNode`] and friends) the
 //!   octree kernels build and the cone kernel reads;
@@ -118,11 +122,15 @@
 //! - Yalçıner, Sahillioğlu 2020, "Voxel transformation: scalable scene geometry discretization
 //!   for global illumination", Journal of Real-Time Image Processing 17(5): [`octree`],
 //!   [`cone`].
+//! - Eisemann, Décoret 2006, "Fast Scene Voxelization and Applications", I3D: [`slicemap`].
+//! - Heitz, Neyret 2012, "Representing Appearance and Pre-filtering Subpixel Data in Sparse
+//!   Voxel Octrees", High-Performance Graphics: [`differential`].
 
 #![deny(missing_docs)]
 
 pub mod cone;
 pub mod context;
+pub mod differential;
 pub mod dynamic;
 mod error;
 pub mod filtered;
@@ -133,6 +141,7 @@ pub mod octree;
 pub mod precompute;
 pub mod random;
 pub mod raycast;
+pub mod slicemap;
 pub mod volume;
 pub mod voxelize;
 

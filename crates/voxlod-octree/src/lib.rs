@@ -44,6 +44,7 @@
 //! | module | owns |
 //! |---|---|
 //! | [`payload`] | the [`Payload`] trait (how eight children combine) and its Averages, SGGX and six-directional-opacity implementations |
+//! | [`microsurface`] | [`MicrosurfacePayload`]: Heitz and Neyret's (2012) distance, normal-distribution and height-correlated colour statistics, and Smith's model written stably for their renderer |
 //! | [`octree`] | the [`Octree`] layout, [`BuildOptions`], which nodes exist and why |
 //! | [`topology`] | [`Topology`]: the occupied levels and their child structure alone, the first step of the build |
 //! | `build` | the CPU reference build ([`Octree::build`], [`Octree::from_brick_map`], [`Octree::from_topology`]) |
@@ -95,6 +96,7 @@ pub mod dynamic;
 mod error;
 pub mod gpu_layout;
 mod input;
+pub mod microsurface;
 pub mod octree;
 pub mod payload;
 mod sample;
@@ -105,6 +107,7 @@ mod validate;
 pub use error::{Error, Result};
 pub use gpu_layout::{FlatOctree, GpuLevel, GpuNode, GpuTile};
 pub use input::plan;
+pub use microsurface::{Microsurface, MicrosurfacePayload};
 pub use octree::{BuildOptions, LevelView, MAX_DENSE_LOG2, MAX_DEPTH, NONE, Octree};
 pub use payload::{AveragePayload, DIRECTIONS, Directional, Payload, SggxPayload};
 pub use stats::{LevelStats, MemoryStats};

@@ -47,6 +47,20 @@ pub trait Payload: Copy + Send + Sync + std::fmt::Debug + 'static {
     }
     /// `self += w·other`, used by trilinear and inter-level interpolation.
     fn add_scaled(&mut self, other: &Self, w: f32);
+    /// `self += w·other` where `other` is the stored payload of a node `size` voxels wide whose
+    /// centre lies `offset` voxels from the sample point (sample point − centre): what the
+    /// sampler calls for each corner of a trilinear interpolation. Payloads whose statistics
+    /// do not depend on where they are read (every payload above) keep the default,
+    /// [`Payload::add_scaled`]. A payload stored relative to its node (a distance from the
+    /// node's centre in node units, as [`crate::MicrosurfacePayload`]) re-expresses `other` at
+    /// the sample point in voxel units first, so that every sample, of any level, is in the
+    /// same frame. Must be linear in `other`, and equal [`Payload::add_scaled`] for
+    /// `offset = 0`, `size = 1`.
+    #[inline]
+    fn add_scaled_at(&mut self, other: &Self, w: f32, offset: Vec3, size: f32) {
+        let _ = (offset, size);
+        self.add_scaled(other, w);
+    }
     /// Mean (isotropic) opacity in \[0, 1\].
     fn opacity(&self) -> f32;
     /// Why this payload cannot be stored in a leaf (non-finite value, opacity outside

@@ -11,6 +11,10 @@
 //!   to `depth`: a node of level `l` is `2^l` voxels wide. A diameter below one voxel (a cone's
 //!   apex, a ray), zero or NaN samples level 0; an infinite one the root.
 //! - A non-finite position samples empty space.
+//! - Each corner is added through [`Payload::add_scaled_at`] with the offset from its centre to
+//!   the sample point and its size, so that a payload stored relative to its node (a distance
+//!   from the node's centre, [`crate::MicrosurfacePayload`]) is read at the sample point, in
+//!   voxel units, on every level; for every other payload this is [`Payload::add_scaled`].
 //!
 //! Cost: per level, one descent from the finest dense level (`first_dense − l` child reads) and
 //! at most 7 neighbour steps (a tile-link read only when the step leaves the
@@ -149,9 +153,14 @@ impl<P: Payload> Octree<P> {
         let wy = [1.0 - f.y, f.y];
         let wz = [1.0 - f.z, f.z];
         let wxy = [wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]];
+        let node = (1u32 << level) as f32;
         for (e, &n) in nodes.iter().enumerate() {
             if n != NONE {
-                out.add_scaled(&lv.payload[n as usize], wxy[e & 3] * wz[e >> 2]);
+                // Sample point − corner centre, voxels (read only by payloads stored relative
+                // to their node; the others ignore it and the compiler drops it).
+                let corner = Vec3::new((e & 1) as f32, (e >> 1 & 1) as f32, (e >> 2) as f32);
+                let offset = (f - corner) * node;
+                out.add_scaled_at(&lv.payload[n as usize], wxy[e & 3] * wz[e >> 2], offset, node);
             }
         }
         out

@@ -48,7 +48,9 @@
 //! | [`filtered`] | the filtered-appearance representations of Brito, Poulin and Teichrieb (2023): Averages, \[VJK21\], virtual mesh + opacity subgrid, Adaptive |
 //! | [`volume`] | procedural participating media with metavoxels (McNabb 2015, GPU Pro 6): attenuation models, metavoxel sizes, memory |
 //! | [`dynamic`] | dynamic scenes by voxel transformation (Yalçıner and Sahillioğlu 2020): transformed object-space caches against re-voxelization — agreement, exact rotations, temporal stability, time per frame against object count, a frame sequence on either backend |
+//! | [`slicemap`] | slicemaps (Eisemann and Décoret 2006): holes against the exact voxelizers, transmittance shadow maps against ray-traced transmittance, the traversed volume for refraction against ray-cast intervals |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
+//! | [`heitz_neyret`] | Heitz and Neyret's (2012) pre-filtered surface statistics with coverage masks against alpha blending over distance: error, silhouettes, colour at grazing angles, cost, bytes per node |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
 //! cameras), [`spread`] (mean and range over views), [`alloc`] (peak heap memory per stage),
@@ -87,6 +89,8 @@
 //!   for global illumination", Journal of Real-Time Image Processing 17(5), §4.5, and Crassin,
 //!   Neyret, Sainz, Green, Eisemann 2011, "Interactive Indirect Illumination Using Voxel Cone
 //!   Tracing", Pacific Graphics: [`cone`].
+//! - Eisemann, Décoret 2006, "Fast Scene Voxelization and Applications", ACM Symposium on
+//!   Interactive 3D Graphics and Games (I3D), §2, §3.1 and §3.3: [`slicemap`].
 //! - Wang, Bovik, Sheikh, Simoncelli 2004, "Image Quality Assessment: From Error Visibility to
 //!   Structural Similarity", IEEE Transactions on Image Processing 13(4): the SSIM every study
 //!   reports.
@@ -101,9 +105,11 @@ pub mod dynamic;
 mod error;
 pub mod filtered;
 mod ground_truths;
+pub mod heitz_neyret;
 pub mod machine;
 pub mod report;
 pub mod scenes;
+pub mod slicemap;
 pub mod spread;
 pub mod views;
 pub mod volume;

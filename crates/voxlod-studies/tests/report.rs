@@ -89,7 +89,7 @@ fn tiny_experiment_writes_a_consistent_report() {
     let written = outcome.report.write(&dir).unwrap();
     let md = std::fs::read_to_string(&written.markdown).unwrap();
     assert!(md.contains("bunny") && md.contains("baseline (opaque cubes)"), "{md}");
-    assert!(md.contains("Ground-truth noise"));
+    assert!(md.contains("The ground truth's own error"), "{md}");
     assert!(dir.join("assets/ssim-vs-memory.svg").exists());
     assert!(md.contains("filtered appearance 16^3"), "{md}");
     for m in METHODS {

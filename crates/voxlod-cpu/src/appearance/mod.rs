@@ -12,6 +12,7 @@ pub mod adaptive;
 pub mod averages;
 pub mod eigen;
 pub mod line_sampler;
+pub mod microsurface;
 pub mod nonexp;
 pub mod precompute;
 pub mod sggx;

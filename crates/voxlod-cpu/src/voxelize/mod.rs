@@ -52,6 +52,7 @@ pub mod lattice;
 pub mod overlap;
 mod pairs;
 pub mod raster;
+pub mod slicemap;
 mod solid;
 mod sort;
 mod surface;

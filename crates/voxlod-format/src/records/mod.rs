@@ -1,6 +1,6 @@
 //! Per-voxel appearance records of the filtered representations (Brito, Poulin and Teichrieb, HPG 2023),
-//! frozen `#[repr(C)]` `Pod` layouts that the GPU mirrors field for field. All fields are bytes
-//! (or one `u32`), so a record has no padding the compiler chooses and no alignment above 4.
+//! frozen `#[repr(C)]` `Pod` layouts that the GPU mirrors field for field. All fields are bytes,
+//! one `u32` or `f32`s, so a record has no padding the compiler chooses and no alignment above 4.
 //!
 //! | record | bytes | content |
 //! |---|---|---|
@@ -11,6 +11,7 @@
 //! | [`AdaptiveRef`] | 4 | which representation a voxel uses (2 bits) and its index in that representation's array (30 bits) |
 //! | [`VoxelSkin`] | 8 | linear-blend-skinning influences of a voxel of an object-space cache: 4 joint indices (u8), 4 weights (unorm8 summing to 255) |
 //! | [`SkinnedRecord`] | 16 | a skinned object's cached voxel: [`AverageRecord`] + [`VoxelSkin`] |
+//! | [`MicrosurfaceRecord`] | 84 | Heitz and Neyret (2012) Gaussian micro-surface statistics of a leaf, `f32` (not quantized: the octree pre-filters them) |
 //!
 //! Decoders return linear floats; quantizers are in [`quant`].
 
@@ -257,6 +258,34 @@ impl AdaptiveRef {
     pub fn index(self) -> u32 {
         self.0 & Self::MAX_INDEX
     }
+}
+
+/// The Gaussian micro-surface of one voxel (Heitz and Neyret 2012 §5.2), as fitted to its
+/// surface samples: the leaf record of voxlod-octree's `MicrosurfacePayload`. Lengths are in
+/// voxel units; every field is `f32` (the statistics are pre-filtered up the octree, so they
+/// are kept at full precision here).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct MicrosurfaceRecord {
+    /// Centroid of the surface in the voxel, voxel-local (in \[0, 1\]³ for surface samples).
+    pub centroid: [f32; 3],
+    /// The normal of the macro-surface plane through the centroid: the mean of the samples'
+    /// unit normals (length ≤ 1: it shrinks as the normals spread), or a unit principal axis
+    /// where the normals cancel (a thin two-sided sheet).
+    pub plane_normal: [f32; 3],
+    /// Second moments of the samples' unit normals `E[n nᵀ]`: `xx, yy, zz, xy, xz, yz`.
+    pub normal_moments: [f32; 6],
+    /// Variance of the samples' heights about the plane, voxels².
+    pub height_variance: f32,
+    /// Mean linear albedo `ā`.
+    pub albedo: [f32; 3],
+    /// Projection `aₛ` of the albedo on the height profile `s(h) = erf(h/(√2·σh))`.
+    pub albedo_slope: [f32; 3],
+    /// Mean specular level (0 for diffuse materials).
+    pub specular: f32,
+    /// Mean slope variance of the materials' own micro-facets (Blinn-Phong exponent `e` as
+    /// `1/(e + 2)`, the Beckmann equivalent).
+    pub roughness: f32,
 }
 
 macro_rules! byte_records {

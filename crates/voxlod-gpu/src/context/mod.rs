@@ -47,6 +47,7 @@ pub struct Context {
     info: wgpu::AdapterInfo,
     index: usize,
     limits: wgpu::Limits,
+    downlevel: wgpu::DownlevelCapabilities,
     incidents: Incidents,
     timeout: Duration,
 }
@@ -82,6 +83,7 @@ impl Context {
         let info = adapter.get_info();
         // Ask for everything the adapter offers: kernels check their needs against these.
         let limits = adapter.limits();
+        let downlevel = adapter.get_downlevel_capabilities();
         let desc = wgpu::DeviceDescriptor {
             label: Some("voxlod"),
             required_limits: limits.clone(),
@@ -107,6 +109,7 @@ impl Context {
             info,
             index,
             limits,
+            downlevel,
             incidents,
             timeout: Duration::from_secs(timeout),
         })
@@ -136,6 +139,12 @@ impl Context {
     /// The device's limits (all the adapter offers).
     pub fn limits(&self) -> &wgpu::Limits {
         &self.limits
+    }
+
+    /// The adapter's downlevel capabilities (what it supports below full WebGPU, e.g. storage
+    /// buffers written from fragment shaders): kernels check their needs against these.
+    pub fn downlevel(&self) -> &wgpu::DownlevelCapabilities {
+        &self.downlevel
     }
 
     /// The wgpu device.

@@ -2,9 +2,10 @@
 //!
 //! Modelled on wgpu's own test harness: kernel bodies ([`voxelize`], [`raycast`], [`random`],
 //! [`materials`], [`ground_truth`], [`filtered`], [`voxels`], [`octree`], [`precompute`],
-//! [`cone`], [`dynamic`], [`volume`]), each run on the CPU reference and then on every adapter wgpu finds,
-//! against the same oracle and the same stated tolerance; known driver problems are data
-//! ([`KNOWN_ISSUES`]: skip, or expect failure, with the reason), never `#[ignore]`.
+//! [`cone`], [`differential`], [`dynamic`], [`volume`], [`slicemap`]), each run on the CPU
+//! reference and then on every adapter wgpu finds, against the same oracle and the same stated
+//! tolerance; known driver problems are data ([`KNOWN_ISSUES`]: skip, or expect failure, with
+//! the reason), never `#[ignore]`.
 //!
 //! Each (kernel body × executor) is its own test, named `<kernel body> :: <executor>` (e.g.
 //! `octree build topology (scenes) :: llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`), so the
@@ -18,6 +19,7 @@
 //! not look green.
 
 mod cone;
+mod differential;
 mod dynamic;
 mod filtered;
 mod ground_truth;
@@ -28,6 +30,7 @@ mod octree;
 mod precompute;
 mod random;
 mod raycast;
+mod slicemap;
 mod volume;
 mod voxelize;
 mod voxels;
@@ -85,6 +88,10 @@ const KERNELS: &[Kernel] = &[
     Kernel { name: "dynamic rebuild (exact)", body: dynamic::rebuild_scenes },
     Kernel { name: "dynamic inject (scenes)", body: dynamic::inject_scenes },
     Kernel { name: "dynamic frame (scenes)", body: dynamic::frame_scenes },
+    Kernel { name: "differential cone tracing (scenes)", body: differential::scenes },
+    Kernel { name: "differential cone tracing (proptest)", body: differential::property },
+    Kernel { name: "differential cone tracing (control)", body: differential::control },
+    Kernel { name: "differential Smith f32 vs f64", body: differential::smith },
     Kernel { name: "volume binning (scenes)", body: volume::binning_scenes },
     Kernel { name: "volume fill (scenes)", body: volume::fill_scenes },
     Kernel { name: "volume propagation (scenes)", body: volume::propagation_scenes },
@@ -94,6 +101,10 @@ const KERNELS: &[Kernel] = &[
     Kernel { name: "volume frame (extremes)", body: volume::extremes },
     Kernel { name: "volume control (must fail)", body: volume::control },
     Kernel { name: "volume errors", body: volume::errors },
+    Kernel { name: "slicemap (scenes)", body: slicemap::scenes },
+    Kernel { name: "slicemap (proptest)", body: slicemap::property },
+    Kernel { name: "slicemap queries (scenes)", body: slicemap::queries },
+    Kernel { name: "slicemap control (must fail)", body: slicemap::control },
 ];
 
 fn main() -> ExitCode {

@@ -7,10 +7,12 @@
 //! | [`island`](mod@island) | heightfield island, specular sea, rocks, thin grass blades | direction-dependent opacity of oriented sub-voxel blades; two surfaces in one voxel at the shore; specular highlights |
 //! | [`blinds`](mod@blinds) | tilted two-coloured slats spaced below a voxel, before a striped wall | directional opacity and colour with a closed-form answer |
 //! | [`crowd`](mod@crowd) | skinned walkers (17 joints, a walk cycle) among rotating tori and cubes on a static floor, animated | dynamic scenes: voxel transformation of rigid and skinned objects against re-voxelization |
+//! | [`bumpy`](mod@bumpy) (`bumpy-sphere`, `bumpy-specular`) | a closed sphere with fine fractal displacement, colour correlated with height or one glossy grey | view- and light-dependent colour and roughness from sub-pixel relief (Heitz and Neyret 2012) |
 //! | `cornell`, `cube`, `sphere` | [`primitives`] | analytic checks |
 //!
 //! Triangle counts at default parameters: `forest` 294 776, `island` about 142 000, `blinds`
-//! 1 554, `crowd` 60 898 (16 walkers, 16 objects), `cornell` 34, `cube` 12, `sphere` 1 280. Build one by name with
+//! 1 554, `bumpy-sphere` and `bumpy-specular` 81 920, `crowd` 60 898 (16 walkers, 16 objects),
+//! `cornell` 34, `cube` 12, `sphere` 1 280. Build one by name with
 //! [`builtin`]`("forest", &[("trees", "20")])` or [`from_spec`]`("forest?trees=20&seed=3")`
 //! (the syntax is in [`registry`]), or directly from a parameter struct ([`ForestParams`],
 //! [`IslandParams`], [`BlindsParams`]), whose fields document their ranges and cost.
@@ -36,6 +38,7 @@
 
 pub mod blinds;
 mod builder;
+pub mod bumpy;
 pub mod crowd;
 pub mod forest;
 pub mod island;
@@ -53,6 +56,7 @@ mod tree;
 use glam::Vec3;
 
 pub use blinds::{BlindsParams, SlatGeometry, blinds};
+pub use bumpy::{BumpyParams, bumpy};
 pub use crowd::{CrowdParams, crowd};
 pub use forest::{ForestParams, forest};
 pub use island::{IslandParams, island};

@@ -13,7 +13,10 @@ use glam::Vec3;
 
 use super::param::{parse, parse_bool, unknown};
 use super::primitives::{cornell_box, cube, icosphere, scene_with};
-use super::{BlindsParams, CrowdParams, ForestParams, IslandParams, blinds, crowd, forest, island};
+use super::{
+    BlindsParams, BumpyParams, CrowdParams, ForestParams, IslandParams, blinds, bumpy, crowd,
+    forest, island,
+};
 use crate::{Error, Material, Result, Scene};
 
 /// One parameter of a builtin scene.
@@ -84,6 +87,24 @@ const CROWD_PARAMS: &[ParamInfo] = &[
     param("seed", "1", "random seed, any u64"),
 ];
 
+const BUMPY_SPHERE_PARAMS: &[ParamInfo] = &[
+    param("subdiv", "6", "icosphere subdivisions (20·4^subdiv triangles), 0..=7"),
+    param("amplitude", "0.1", "largest displacement (radius 1), (0, 0.5]"),
+    param("frequency", "12", "first octave's frequency on the unit sphere, (0, 1e4]"),
+    param("octaves", "3", "octaves of noise, 1..=12"),
+    param("seed", "1", "random seed, any u64"),
+];
+
+const BUMPY_SPECULAR_PARAMS: &[ParamInfo] = &[
+    param("subdiv", "6", "icosphere subdivisions (20·4^subdiv triangles), 0..=7"),
+    param("amplitude", "0.03", "largest displacement (radius 1), (0, 0.5]"),
+    param("frequency", "20", "first octave's frequency on the unit sphere, (0, 1e4]"),
+    param("octaves", "2", "octaves of noise, 1..=12"),
+    param("seed", "1", "random seed, any u64"),
+    param("specular", "0.5", "specular level, [0, 1]"),
+    param("shininess", "200", "Blinn-Phong exponent, [0, 1e4]"),
+];
+
 const SPHERE_PARAMS: &[ParamInfo] =
     &[param("subdiv", "3", "icosphere subdivisions (20·4^subdiv triangles), 0..=7")];
 
@@ -111,6 +132,22 @@ const BUILTINS: &[Builtin] = &[
         description: "animated: skinned walkers among rotating rigid objects on a static floor",
         params: CROWD_PARAMS,
         build: |kv| crowd(&crowd_params(kv)?),
+    },
+    Builtin {
+        name: "bumpy-sphere",
+        description: "closed sphere with fine relief, colour correlated with height (red valleys, green tops)",
+        params: BUMPY_SPHERE_PARAMS,
+        build: |kv| {
+            bumpy("bumpy-sphere", &bumpy_params("bumpy-sphere", BumpyParams::default(), kv)?)
+        },
+    },
+    Builtin {
+        name: "bumpy-specular",
+        description: "closed sphere with fine relief, one glossy grey material",
+        params: BUMPY_SPECULAR_PARAMS,
+        build: |kv| {
+            bumpy("bumpy-specular", &bumpy_params("bumpy-specular", BumpyParams::specular(), kv)?)
+        },
     },
     Builtin {
         name: "cornell",
@@ -250,6 +287,28 @@ pub(super) fn forest_params(kv: &[(&str, &str)]) -> Result<ForestParams> {
         p = p.fit_triangles(target);
     }
     p.validate()?;
+    Ok(p)
+}
+
+/// [`BumpyParams`] from spec pairs over a preset.
+pub(super) fn bumpy_params(
+    scene: &str,
+    mut p: BumpyParams,
+    kv: &[(&str, &str)],
+) -> Result<BumpyParams> {
+    for &(k, v) in kv {
+        match k {
+            "subdiv" => p.subdiv = parse(scene, k, v)?,
+            "amplitude" => p.amplitude = parse(scene, k, v)?,
+            "frequency" => p.frequency = parse(scene, k, v)?,
+            "octaves" => p.octaves = parse(scene, k, v)?,
+            "seed" => p.seed = parse(scene, k, v)?,
+            "specular" => p.specular = parse(scene, k, v)?,
+            "shininess" => p.shininess = parse(scene, k, v)?,
+            _ => return Err(unknown(scene, k, v, &[])),
+        }
+    }
+    p.validate(scene)?;
     Ok(p)
 }
 

@@ -13,6 +13,8 @@ const SMALL: &[&str] = &[
     "island?terrain=24&grass=500&rocks=2",
     "blinds?slats=16",
     "crowd?walkers=2&rigid=2&sides=8",
+    "bumpy-sphere?subdiv=2",
+    "bumpy-specular?subdiv=2",
     "cornell",
     "cube",
     "sphere?subdiv=1",
