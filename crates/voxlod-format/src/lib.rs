@@ -96,6 +96,7 @@ pub mod grid;
 pub mod io;
 pub mod morton;
 pub mod records;
+pub mod vol;
 pub mod vxl;
 
 pub use brickmap::{BRICK_EDGE, BRICK_VOXELS, BrickMap};
