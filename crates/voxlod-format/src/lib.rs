@@ -97,6 +97,7 @@ pub mod io;
 pub mod morton;
 pub mod records;
 pub mod vol;
+pub mod vox;
 pub mod vxl;
 
 pub use brickmap::{BRICK_EDGE, BRICK_VOXELS, BrickMap};
