@@ -3,6 +3,7 @@
 
 mod compare;
 mod cone;
+mod export;
 mod info;
 mod render;
 mod report;
@@ -17,6 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 pub use compare::compare;
 pub use cone::cone;
+pub use export::export;
 pub use info::info;
 pub use render::render;
 pub use report::report;

@@ -2,6 +2,7 @@
 
 mod cli;
 mod cone;
+mod export;
 mod scene_files;
 mod volume;
 
