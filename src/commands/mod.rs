@@ -3,6 +3,7 @@
 
 mod compare;
 mod cone;
+mod export;
 mod heitz_neyret;
 mod info;
 mod render;
@@ -19,6 +20,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 pub use compare::compare;
 pub use cone::cone;
+pub use export::export;
 pub use heitz_neyret::heitz_neyret;
 pub use info::info;
 pub use render::render;

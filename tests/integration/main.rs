@@ -2,6 +2,7 @@
 
 mod cli;
 mod cone;
+mod export;
 mod heitz_neyret;
 mod scene_files;
 mod slicemap;
