@@ -35,6 +35,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
     match cli.command.unwrap_or(cli::Command::Report(Default::default())) {
         cli::Command::Report(a) => commands::report(&ui, a),
         cli::Command::Voxelize(a) => commands::voxelize(&ui, a),
+        cli::Command::Export(a) => commands::export(&ui, a),
         cli::Command::Render(a) => commands::render(&ui, a),
         cli::Command::CompareImages(a) => commands::compare_images(a),
         cli::Command::Compare(a) => commands::compare(&ui, a),

@@ -29,6 +29,9 @@ pub enum Command {
     Report(ReportArgs),
     /// Voxelize a scene into a .vxl or .binvox file.
     Voxelize(VoxelizeArgs),
+    /// Export a scene (voxelized and filtered with the Averages fit) or a .vxl file to
+    /// MagicaVoxel .vox or Mitsuba 3 .vol.
+    Export(ExportArgs),
     /// Render the ground truth of a scene (mesh ray casting) to a PNG.
     Render(RenderArgs),
     /// Compare two images: MSE, PSNR, SSIM on 8-bit sRGB.
@@ -129,6 +132,45 @@ pub struct VoxelizeArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `voxlod export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`, voxelized and
+    /// filtered on the way; or a .vxl file of Averages or occupancy records.
+    pub input: String,
+    /// Output file: .vox (MagicaVoxel: occupancy and a 255-colour palette) or .vol (Mitsuba 3:
+    /// density, with the albedo beside it as NAME.albedo.vol).
+    #[arg(short, long, value_parser = parse::export_output)]
+    pub output: ExportOutput,
+    /// Voxels along the longest axis of the scene's bounds (scene inputs).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=2_097_152))]
+    pub res: u32,
+    /// Sampling lines per voxel of the Averages fit (scene inputs).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rays: u32,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// An export's output file and the format its extension names.
+#[derive(Clone, Debug)]
+pub struct ExportOutput {
+    /// The file.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: ExportFormat,
+}
+
+/// The formats `voxlod export` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExportFormat {
+    /// MagicaVoxel `.vox`.
+    Vox,
+    /// Mitsuba 3 `.vol`.
+    Vol,
 }
 
 /// `voxlod render`.

@@ -60,6 +60,18 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
+/// An export's output path, its format named by its extension (`.vox` or `.vol`).
+pub fn export_output(s: &str) -> Result<super::ExportOutput, String> {
+    let path = std::path::PathBuf::from(s);
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let format = match ext.as_deref() {
+        Some("vox") => super::ExportFormat::Vox,
+        Some("vol") => super::ExportFormat::Vol,
+        _ => return Err(format!("'{s}' must end in .vox (MagicaVoxel) or .vol (Mitsuba 3)")),
+    };
+    Ok(super::ExportOutput { path, format })
+}
+
 /// An image size `WxH` for clap (see [`size`]).
 pub fn size_arg(s: &str) -> Result<(u32, u32), String> {
     size(s).map_err(|e| format!("{e:#}"))

@@ -4,6 +4,7 @@
 mod compare;
 mod cone;
 mod dynamic;
+mod export;
 mod heitz_neyret;
 mod info;
 mod render;
@@ -21,6 +22,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub use compare::compare;
 pub use cone::cone;
 pub use dynamic::dynamic;
+pub use export::export;
 pub use heitz_neyret::heitz_neyret;
 pub use info::info;
 pub use render::render;

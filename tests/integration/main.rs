@@ -3,6 +3,7 @@
 mod cli;
 mod cone;
 mod dynamic;
+mod export;
 mod heitz_neyret;
 mod scene_files;
 mod slicemap;

@@ -118,6 +118,29 @@ pub enum Error {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// Data that a file format cannot hold: a dimension, count or value beyond what the format
+    /// stores. Nothing is written.
+    #[error("{format} cannot hold {what}: {reason}")]
+    Unrepresentable {
+        /// Which format ("vol", "vox", ...).
+        format: &'static str,
+        /// What was refused (with where it is, e.g. the voxel).
+        what: String,
+        /// The format's limit.
+        reason: String,
+    },
+    /// A well-formed file that uses a feature of its format this library does not read.
+    #[error("{path}: {format} file at byte {offset} uses an unsupported feature: {feature}")]
+    Unsupported {
+        /// The file (or `<memory>` for byte slices).
+        path: PathBuf,
+        /// Which format.
+        format: &'static str,
+        /// Byte offset of the feature.
+        offset: u64,
+        /// What it is.
+        feature: String,
+    },
     /// The stored checksum does not match the content.
     #[error(
         "{path}: checksum mismatch (stored {stored:#010x}, computed {computed:#010x}): the file is corrupted"

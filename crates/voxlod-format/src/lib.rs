@@ -1,8 +1,9 @@
 //! The voxel data formats of voxlod: the grid a scene is voxelized into ([`GridSpec`]), 63-bit
 //! 3D Morton codes ([`morton`]), a sparse grid that stores only occupied 8³ bricks
 //! ([`BrickMap`]), the frozen per-voxel appearance records of the filtered representations
-//! ([`records`]), and two files: voxlod's own `.vxl` container ([`vxl`]: versioned,
-//! checksummed, typed records) and binvox ([`binvox`]), for the voxel tools people already have.
+//! ([`records`]), and files: voxlod's own `.vxl` container ([`vxl`]: versioned, checksummed,
+//! typed records), and for the tools people already have binvox ([`binvox`]), MagicaVoxel
+//! `.vox` ([`vox`]) and Mitsuba 3's grid volumes ([`vol`]).
 //!
 //! This crate is the bottom of the voxlod stack: every other voxlod crate speaks its types, and
 //! it depends on no other voxlod crate and on no GPU API. Every type a GPU reads
@@ -50,6 +51,8 @@
 //! | [`BrickMap`] | occupied 8³ bricks (a 512-bit mask and a packed run of values each), sorted by Morton code; iteration in global Morton order |
 //! | [`vxl`] | [`vxl::write`] / [`vxl::read`] / [`vxl::read_info`]; [`VxlRecord`], the trait a storable record implements; the zero-sized [`Occupancy`] |
 //! | [`binvox`] | occupancy export (padded to a cube, world positions kept) and strict import of versions 1 and 2 |
+//! | [`vox`] | MagicaVoxel export (occupancy, a 255-colour palette by median cut + k-means with its measured error, 256³ models placed by the scene graph) and import |
+//! | [`vol`] | Mitsuba 3 `.vol` grid volumes (dense `float32`, 1/3/6 channels): density (extinction) and albedo of an Averages grid; read and write |
 //! | [`records`] | the Averages, SGGX, virtual-mesh and specular records and the adaptive grid's reference, with their quantizers ([`records::quant`]) |
 //! | [`io`] | [`io::write_atomic`]: a temporary file renamed over the target, so a failure never leaves half a file |
 //!
@@ -65,7 +68,9 @@
 //! ([`Error::Malformed`]); a newer format version ([`Error::UnsupportedVersion`]); records of
 //! another type than the one asked for ([`Error::RecordMismatch`]); a checksum that does not
 //! match ([`Error::ChecksumMismatch`]); metadata that cannot be stored
-//! ([`Error::InvalidMetadata`]). Reading never trusts the file: no allocation is sized by a count
+//! ([`Error::InvalidMetadata`]); data a format cannot hold, refused before anything is written
+//! ([`Error::Unrepresentable`]); a file using a feature this library does not read
+//! ([`Error::Unsupported`]). Reading never trusts the file: no allocation is sized by a count
 //! before the count is checked against the file's length, and malformed input is an error, never
 //! a panic.
 //!
@@ -73,7 +78,8 @@
 //! - It does not voxelize or load meshes (voxlod-cpu voxelizes, voxlod-scene loads OBJ and glTF).
 //! - No compression beyond sparsity: payloads are stored as they are in memory, little-endian.
 //! - Files are read whole into memory; there is no streaming or memory-mapped access.
-//! - binvox carries occupancy only; records need `.vxl`.
+//! - binvox carries occupancy only; records need `.vxl`. `.vox` keeps occupancy and quantized
+//!   colours but not the grid's origin and voxel size; `.vol` is dense.
 //! - A [`BrickMap`] is built once from its voxels: values can change in place, but voxels cannot
 //!   be added or removed without rebuilding it.
 //!
@@ -86,6 +92,10 @@
 //! - Heitz, Dupuy, Crassin, Dachsbacher 2015, "The SGGX Microflake Distribution", SIGGRAPH: the
 //!   SGGX matrix.
 //! - Min, binvox file format specification (`patrickmin.com/binvox`): [`binvox`].
+//! - ephtracy, "MagicaVoxel .vox File Format" and its scene-graph extension
+//!   (`github.com/ephtracy/voxel-model`); Heckbert 1982, "Color image quantization for frame
+//!   buffer display", SIGGRAPH (median cut): [`vox`].
+//! - Mitsuba 3 documentation, `gridvolume` plugin (the `.vol` layout): [`vol`].
 
 #![deny(missing_docs)]
 
@@ -96,6 +106,8 @@ pub mod grid;
 pub mod io;
 pub mod morton;
 pub mod records;
+pub mod vol;
+pub mod vox;
 pub mod vxl;
 
 pub use brickmap::{BRICK_EDGE, BRICK_VOXELS, BrickMap};

@@ -72,6 +72,38 @@ impl AverageRecord {
     pub fn opacity(&self) -> f32 {
         from_unorm8(self.opacity)
     }
+
+    /// The exponential extinction coefficient of this voxel's opacity, per world unit:
+    /// [`extinction_from_opacity`]`(self.opacity(), voxel_size)`.
+    pub fn extinction(&self, voxel_size: f64) -> f32 {
+        extinction_from_opacity(self.opacity(), voxel_size)
+    }
+}
+
+/// Largest optical depth across one voxel that a unorm8 opacity stands for: code 255 covers
+/// opacities from 254.5/255 up, so its transmittance is at most 0.5/255 and its optical depth at
+/// least `ln 510` ≈ 6.23. Opacity 1 maps to this depth rather than to an infinite extinction.
+pub const MAX_VOXEL_OPTICAL_DEPTH: f32 = 6.234_411;
+
+/// Extinction σ (per world unit) of a homogeneous voxel of edge `voxel_size` whose opacity along
+/// one voxel edge is `opacity`, under exponential (Beer–Lambert) transmittance:
+/// `σ = −ln(1 − α) / voxel_size`, the optical depth `−ln(1 − α)` capped at
+/// [`MAX_VOXEL_OPTICAL_DEPTH`]. This is what volume formats (OpenVDB, NanoVDB, Mitsuba) call
+/// density. The opacity of an Averages record is a fraction of occluded rays over all
+/// directions, not along one edge, and \[VJK21\]'s non-exponential transmittance (the SGGX
+/// record's γ) has no counterpart in these formats: both are approximations this conversion
+/// makes. Opacity outside `[0, 1]` is clamped; NaN gives 0.
+///
+/// ```
+/// use voxlod_format::records::extinction_from_opacity;
+/// // Half the light through a voxel of 0.5 world units: σ = ln 2 / 0.5.
+/// assert!((extinction_from_opacity(0.5, 0.5) - 2.0 * std::f32::consts::LN_2).abs() < 1e-6);
+/// assert_eq!(extinction_from_opacity(0.0, 0.5), 0.0);
+/// ```
+pub fn extinction_from_opacity(opacity: f32, voxel_size: f64) -> f32 {
+    let a = if opacity.is_nan() { 0.0 } else { opacity.clamp(0.0, 1.0) };
+    let depth = (-(1.0 - a as f64).ln()).min(MAX_VOXEL_OPTICAL_DEPTH as f64);
+    (depth / voxel_size) as f32
 }
 
 /// \[VJK21\]: an SGGX distribution of normals (Heitz et al. 2015), the mean colour, and the
