@@ -38,6 +38,7 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
     let result =
         cone::run(&config, on, &say).with_context(|| format!("cone tracing '{}'", args.scene))?;
     let mut report = Report::new(format!("voxel cone tracing: {}", result.scene));
+    report.text(super::generated_by());
     result.add_to_report(&mut report)?;
     let written = report
         .write(&args.output)

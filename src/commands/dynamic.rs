@@ -42,6 +42,7 @@ pub fn dynamic(ui: &Ui, args: DynamicArgs) -> Result<()> {
     let result = dynamic::run(&config, on, &say)
         .with_context(|| format!("dynamic scene '{}'", args.scene))?;
     let mut report = Report::new(format!("dynamic scenes: {}", result.scene));
+    report.text(super::generated_by());
     result.add_to_report(&mut report)?;
     let written = report
         .write(&args.output)

@@ -24,6 +24,7 @@ pub fn volume(ui: &Ui, args: VolumeArgs) -> Result<()> {
     let result = volume::run(&config, on, &progress)
         .with_context(|| format!("rendering the volume preset '{}'", args.preset))?;
     let mut report = Report::new(format!("voxlod volume {}", args.preset));
+    report.text(super::generated_by());
     result.add_to_report(&mut report)?;
     let written = report
         .write(&args.output)
