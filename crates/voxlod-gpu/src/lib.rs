@@ -148,6 +148,10 @@ pub mod voxelize;
 pub use context::{AdapterSummary, Context, adapters};
 pub use error::{Error, Result};
 
+/// WGSL shared by the cone and differential cone-tracing kernels: Morton codes of dense levels,
+/// a node's +axis neighbour on a sparse level and the descent to a node (`Octree::find`).
+pub const OCTREE_WALK_WGSL: &str = include_str!("octree_walk.wgsl");
+
 /// The README's example, compiled and run as a doc test.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]

@@ -104,49 +104,6 @@ fn any_orthonormal(n: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(b, sign + n.y * n.y * a, -n.y);
 }
 
-fn part1by2(x: u32) -> u32 {
-    var v = x & 0x3ffu;
-    v = (v | (v << 16u)) & 0x030000ffu;
-    v = (v | (v << 8u)) & 0x0300f00fu;
-    v = (v | (v << 4u)) & 0x030c30c3u;
-    v = (v | (v << 2u)) & 0x09249249u;
-    return v;
-}
-
-fn morton(c: vec3<u32>) -> u32 {
-    return part1by2(c.x) | (part1by2(c.y) << 1u) | (part1by2(c.z) << 2u);
-}
-
-fn sparse_neighbour(lv: Level, node: u32, axis: u32) -> u32 {
-    if node == NONE {
-        return NONE;
-    }
-    let local = node - lv.first;
-    let bit = 1u << axis;
-    if (local & bit) == 0u {
-        return lv.first + (local | bit);
-    }
-    let t = tiles[lv.first_tile + local / 8u].links[axis];
-    if t == NONE {
-        return NONE;
-    }
-    return t + (local & 7u & ~bit);
-}
-
-fn find(level: u32, c: vec3<u32>) -> u32 {
-    let top = params.tree.y;
-    var idx = levels[top].first + morton(c >> vec3<u32>(top - level));
-    for (var lv = top; lv > level; lv -= 1u) {
-        let child = nodes[idx].child;
-        if child == NONE {
-            return NONE;
-        }
-        let o = (c >> vec3<u32>(lv - 1u - level)) & vec3<u32>(1u);
-        idx = child + o.x + 2u * o.y + 4u * o.z;
-    }
-    return idx;
-}
-
 // `acc += w·node` with the node moved to the sample point (MicrosurfacePayload::add_scaled_at):
 // centroid·size − offset·coverage, variance·size².
 fn add_at(acc: ptr<function, array<f32, 22>>, node: u32, w: f32, offset: vec3<f32>, size: f32) {

@@ -45,7 +45,11 @@ pub const PROBE_WGSL: &str = include_str!("probe.wgsl");
 
 /// The renderer's whole source.
 pub fn source() -> String {
-    format!("{SMITH_WGSL}\n{}\n{WGSL}", include_str!("../shading.wgsl"))
+    format!(
+        "{SMITH_WGSL}\n{}\n{}\n{WGSL}",
+        include_str!("../shading.wgsl"),
+        crate::OCTREE_WALK_WGSL
+    )
 }
 
 /// The probe's whole source.

@@ -93,12 +93,18 @@ const CONVERT: usize = 5;
 /// Invocations per workgroup of every dynamic kernel.
 pub const WORKGROUP: u64 = 64;
 
-/// The injection kernel's source: the cone kernel's isotropic payload and its functions (the
-/// sampler and `march`, without its entry point), then `inject.wgsl`.
+/// The injection kernel's source: the cone kernel's isotropic payload, the shared octree walk
+/// and the cone kernel's functions (the sampler and `march`, without its entry point), then
+/// `inject.wgsl`.
 pub fn inject_source() -> String {
     let cone = crate::cone::WGSL;
     let functions = cone.find("@compute").map_or(cone, |at| &cone[..at]);
-    format!("{}\n{functions}\n{}", crate::cone::ISOTROPIC_WGSL, include_str!("inject.wgsl"))
+    format!(
+        "{}\n{}\n{functions}\n{}",
+        crate::cone::ISOTROPIC_WGSL,
+        crate::OCTREE_WALK_WGSL,
+        include_str!("inject.wgsl")
+    )
 }
 
 /// The kernels' parameters, bound as read-only storage (mirrors WGSL `Params` of
