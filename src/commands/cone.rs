@@ -1,7 +1,6 @@
 //! `voxlod cone <scene>`: voxel cone tracing against ray-traced references (the cone study).
 
 use anyhow::{Context, Result};
-use voxlod::eval::report::Report;
 use voxlod::studies::cone::{self, ConeConfig, LodConfig};
 
 use super::{Ui, backend, print_json};
@@ -37,12 +36,10 @@ pub fn cone(ui: &Ui, args: ConeArgs) -> Result<()> {
     let say = |m: &str| spinner.set_message(m.to_string());
     let result =
         cone::run(&config, on, &say).with_context(|| format!("cone tracing '{}'", args.scene))?;
-    let mut report = Report::new(format!("voxel cone tracing: {}", result.scene));
-    report.text(super::generated_by());
-    result.add_to_report(&mut report)?;
-    let written = report
-        .write(&args.output)
-        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    let written =
+        super::write_report(&format!("voxel cone tracing: {}", result.scene), &args.output, |r| {
+            result.add_to_report(r)
+        })?;
     spinner.finish_and_clear();
     if args.json {
         return print_json("cone", &result);

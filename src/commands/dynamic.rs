@@ -2,7 +2,6 @@
 //! (the dynamic study), and a frame sequence through the pipeline on either backend.
 
 use anyhow::{Context, Result};
-use voxlod::eval::report::Report;
 use voxlod::studies::dynamic::{self, DynamicConfig};
 
 use super::{Ui, backend, print_json};
@@ -41,12 +40,10 @@ pub fn dynamic(ui: &Ui, args: DynamicArgs) -> Result<()> {
     let say = |m: &str| spinner.set_message(m.to_string());
     let result = dynamic::run(&config, on, &say)
         .with_context(|| format!("dynamic scene '{}'", args.scene))?;
-    let mut report = Report::new(format!("dynamic scenes: {}", result.scene));
-    report.text(super::generated_by());
-    result.add_to_report(&mut report)?;
-    let written = report
-        .write(&args.output)
-        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    let written =
+        super::write_report(&format!("dynamic scenes: {}", result.scene), &args.output, |r| {
+            result.add_to_report(r)
+        })?;
     spinner.finish_and_clear();
     if args.json {
         return print_json("dynamic", &result);

@@ -2,7 +2,6 @@
 //! blending over distance (the study of `voxlod_studies::heitz_neyret`).
 
 use anyhow::{Context, Result};
-use voxlod::eval::report::Report;
 use voxlod::studies::heitz_neyret::{self, HeitzNeyretConfig, SceneCase};
 
 use super::{Ui, backend, print_json};
@@ -42,12 +41,11 @@ pub fn heitz_neyret(ui: &Ui, args: HeitzNeyretArgs) -> Result<()> {
     let spinner = ui.spinner();
     let say = |m: &str| spinner.set_message(m.to_string());
     let result = heitz_neyret::run(&config, on, &say).context("the Heitz–Neyret study")?;
-    let mut report = Report::new("Heitz–Neyret: surface statistics and coverage masks");
-    report.text(super::generated_by());
-    result.add_to_report(&mut report)?;
-    let written = report
-        .write(&args.output)
-        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    let written = super::write_report(
+        "Heitz–Neyret: surface statistics and coverage masks",
+        &args.output,
+        |r| result.add_to_report(r),
+    )?;
     spinner.finish_and_clear();
     if args.json {
         return print_json("heitz-neyret", &result);

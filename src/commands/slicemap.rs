@@ -2,7 +2,6 @@
 //! traversed volume, on one scene or the preset's scenes.
 
 use anyhow::{Context, Result};
-use voxlod::eval::report::Report;
 use voxlod::studies::slicemap::{self, SlicemapConfig};
 
 use super::{Ui, backend, print_json};
@@ -65,12 +64,7 @@ pub fn slicemap(ui: &Ui, args: SlicemapArgs) -> Result<()> {
     let result = slicemap::run(&config, on, &progress)
         .with_context(|| format!("measuring the slicemaps of {what}"))?;
     let title = format!("voxlod slicemap {}", args.scene.as_deref().unwrap_or_default());
-    let mut report = Report::new(title.trim_end());
-    report.text(super::generated_by());
-    result.add_to_report(&mut report)?;
-    let written = report
-        .write(&args.output)
-        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    let written = super::write_report(title.trim_end(), &args.output, |r| result.add_to_report(r))?;
     let json = serde_json::to_vec_pretty(&result.to_json())?;
     let json_path = args.output.join("slicemap.json");
     voxlod::format::io::write_atomic(&json_path, |w| w.write_all(&json))

@@ -1,7 +1,6 @@
 //! `voxlod volume <preset>`: the procedural-volume trade of one particle preset.
 
 use anyhow::{Context, Result};
-use voxlod::eval::report::Report;
 use voxlod::studies::volume::{self, VolumeConfig};
 
 use super::{Ui, backend, print_json};
@@ -23,12 +22,10 @@ pub fn volume(ui: &Ui, args: VolumeArgs) -> Result<()> {
     let progress = |msg: &str| spinner.set_message(msg.to_string());
     let result = volume::run(&config, on, &progress)
         .with_context(|| format!("rendering the volume preset '{}'", args.preset))?;
-    let mut report = Report::new(format!("voxlod volume {}", args.preset));
-    report.text(super::generated_by());
-    result.add_to_report(&mut report)?;
-    let written = report
-        .write(&args.output)
-        .with_context(|| format!("writing the report into {}", args.output.display()))?;
+    let written =
+        super::write_report(&format!("voxlod volume {}", args.preset), &args.output, |r| {
+            result.add_to_report(r)
+        })?;
     spinner.finish_and_clear();
     if args.json {
         return print_json("volume", &result);
