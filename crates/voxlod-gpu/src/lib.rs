@@ -58,7 +58,7 @@
 //! | [`precompute`] | per-voxel ray sampling, Averages sums, opacity subgrid | [`voxlod_cpu::appearance::precompute`] | ≤ 10⁻³ of lines change case; ±1 per record byte |
 //! | [`octree`] | sparse voxel octree build, Averages pre-filter | [`voxlod_octree`] | exact topology; payloads within `8·depth·2⁻²⁴` |
 //! | [`cone`] | cone tracing (AO, diffuse, specular) | [`voxlod_cone::ConeTracer`] | within 1e-3 for 99 % of points |
-//! | [`dynamic`] | a dynamic scene's frame: voxel transformation, fixed-point blend, octree rebuild, light injection | [`voxlod_octree::dynamic`], [`voxlod_cone::inject()`] | cells exact but within 10⁻⁴ voxel of a boundary (≤ 0.1 %); sums and topology exact; radiance within 1e-3 for 99 % |
+//! | [`dynamic`] | a dynamic scene's frame: voxel transformation, fixed-point blend, octree rebuild, light injection | [`voxlod_octree::dynamic`], [`voxlod_cone::inject()`] | cells exact but within 10⁻⁵ voxel of a boundary (≤ 0.1 %); sums and topology exact; radiance within 1e-3 for 99 % |
 //! | [`differential`] | Heitz–Neyret differential cone tracing with coverage masks; its `f32` Smith functions | [`voxlod_cone::DifferentialRenderer`] with [`differential::shade_element`]; `f64` Λ and erfc | 2 sRGB steps, 98 % of pixels, same element counts; Λ within 1e-4 relative |
 //! | [`volume`] | metavoxel binning, fill, propagation, march | [`voxlod_cpu::volume`] | binning exact; values 1e-5 / 1e-4 relative; image 1 sRGB step |
 //! | [`slicemap`] | slicemaps by rasterization (a render pipeline: vertex + fragment stages, fragment-stage `atomicOr`), their occluder and inner-voxel queries | [`voxlod_cpu::voxelize::slicemap`] | columns exact; slice bits but at fragments within 1e-5 of a slice boundary; queries exact |

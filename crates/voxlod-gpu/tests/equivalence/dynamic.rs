@@ -51,7 +51,7 @@ use crate::harness::{Executor, Measure};
 
 /// Largest distance (voxels) of a voxel whose cell or fraction differs from the boundary it
 /// crossed.
-pub const BOUNDARY: f64 = 1e-4;
+pub const BOUNDARY: f64 = 1e-5;
 /// Fraction of the voxels that may differ at a boundary.
 pub const FRACTION_AT_BOUNDARY: f64 = 1e-3;
 /// Payload components (magnitude ≤ 1) converted from exact sums.
