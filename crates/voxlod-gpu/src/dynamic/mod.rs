@@ -58,9 +58,15 @@ use voxlod_octree::dynamic::{
 };
 use voxlod_octree::{AveragePayload, GpuLevel};
 
-use crate::cone::{ConeKernel, ConeQuery, ConeShade, GpuConeOctree, GpuConeParams, ShadingPoint};
+use crate::cone::{ConeKernel, ConeQuery, ConeShade, GpuConeOctree, ShadingPoint};
 use crate::octree::{GpuOctree, OctreeBuilder};
 use crate::{Context, Error, Result};
+
+mod inject;
+mod params;
+
+pub use inject::inject_source;
+pub use params::{GpuDynamicParams, GpuInjectParams, GpuObject};
 
 /// The WGSL shared by the dynamic kernels (mirrors of [`Placed`] and [`GpuDynamicParams`],
 /// Morton codes, corners, 64-bit helpers).
@@ -92,70 +98,6 @@ const CONVERT: usize = 5;
 
 /// Invocations per workgroup of every dynamic kernel.
 pub const WORKGROUP: u64 = 64;
-
-/// The injection kernel's source: the cone kernel's isotropic payload, the shared octree walk
-/// and the cone kernel's functions (the sampler and `march`, without its entry point), then
-/// `inject.wgsl`.
-pub fn inject_source() -> String {
-    let cone = crate::cone::WGSL;
-    let functions = cone.find("@compute").map_or(cone, |at| &cone[..at]);
-    format!(
-        "{}\n{}\n{functions}\n{}",
-        crate::cone::ISOTROPIC_WGSL,
-        crate::OCTREE_WALK_WGSL,
-        include_str!("inject.wgsl")
-    )
-}
-
-/// The kernels' parameters, bound as read-only storage (mirrors WGSL `Params` of
-/// `common.wgsl`). 32 bytes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuDynamicParams {
-    /// Invocations of the dispatch.
-    pub n: u32,
-    /// 0 nearest, 1 8-neighbour.
-    pub filter_mode: u32,
-    /// `log2` of the brick table's resolution per axis.
-    pub brick_log2: u32,
-    /// Kernel-specific: 1 for the static pass of `mark` and `accumulate`, the compact pass of
-    /// `compact`, the radiance conversion of `convert`.
-    pub extra: u32,
-    /// The world grid's dimensions.
-    pub dims: [u32; 3],
-    /// The occupancy threshold in 2⁻¹⁸ voxel (at least 1).
-    pub min_weight: u32,
-}
-
-/// One object's frame as the transform reads it (mirrors WGSL `Object`). 32 bytes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuObject {
-    /// The anchor cell.
-    pub anchor: [i32; 3],
-    /// Index of its first matrix.
-    pub first_matrix: u32,
-    /// 1 if skinned.
-    pub skinned: u32,
-    /// 1 if entirely outside (not transformed).
-    pub outside: u32,
-    /// Padding.
-    pub pad: [u32; 2],
-}
-
-/// The injection kernel's own parameters (mirrors WGSL `InjectParams`). 64 bytes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuInjectParams {
-    /// Direction toward a directional light or a point light's position; w: 1 for a point.
-    pub light_a: [f32; 4],
-    /// Irradiance or intensity; w: 1 to march shadows.
-    pub light_b: [f32; 4],
-    /// Shadow ray offset in voxels; unused ×3.
-    pub shadow: [f32; 4],
-    /// Leaves; unused ×3.
-    pub counts: [u32; 4],
-}
 
 /// A moving object's place in the concatenated caches.
 #[derive(Clone, Copy, Debug)]
@@ -583,158 +525,6 @@ impl<'a> DynamicKernels<'a> {
         Ok((coords.chunks_exact(3).map(UVec3::from_slice).collect(), payload, sums))
     }
 
-    /// Converts `n` payloads of the Averages layout to the cone kernel's isotropic layout:
-    /// opacity only, or (`radiance`) the colour words as radiance.
-    fn convert(&self, average: &wgpu::Buffer, n: u64, radiance: bool) -> Result<wgpu::Buffer> {
-        let ctx = self.ctx;
-        let out = ctx.storage_zeroed("cone payloads", n.max(1) * 16)?;
-        let mut keep = Vec::new();
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        let p = GpuDynamicParams { n: n as u32, extra: u32::from(radiance), ..Default::default() };
-        self.run(&mut encoder, CONVERT, n, p, &[(1, average), (2, &out)], &mut keep)?;
-        ctx.submit("converting octree payloads", encoder)?;
-        Ok(out)
-    }
-
-    fn inject_pipeline(&self) -> Result<&wgpu::ComputePipeline> {
-        if let Some(p) = self.inject.get() {
-            return Ok(p);
-        }
-        let p = self.ctx.pipeline("dynamic inject", &inject_source())?;
-        Ok(self.inject.get_or_init(|| p))
-    }
-
-    /// The injected radiance of every leaf of `tree` (built from `leaves`), with the rules of
-    /// voxlod-cone's `inject` (module docs, kernel 7), in the Averages layout. Errors on an
-    /// invalid light or shadow parameter (voxlod-cone's), or a per-leaf visibility list
-    /// ([`Shadows::PerLeaf`] is a CPU-side input: not supported here).
-    pub fn inject(
-        &self,
-        grid: &GridSpec,
-        tree: &GpuOctree<'a>,
-        leaves: &GpuLeaves,
-        light: &Light,
-        shadows: &Shadows,
-    ) -> Result<wgpu::Buffer> {
-        let ctx = self.ctx;
-        let (march, offset, step) = match *shadows {
-            Shadows::None => (false, 0.0, 0.5),
-            Shadows::March { offset_voxels, step_factor } => {
-                let check = |ok: bool, name, v: f32, reason| {
-                    if ok {
-                        Ok(())
-                    } else {
-                        Err(voxlod_cone::Error::InvalidParameter {
-                            name,
-                            value: v.to_string(),
-                            reason,
-                        })
-                    }
-                };
-                check(
-                    offset_voxels.is_finite() && offset_voxels >= 0.0,
-                    "offset_voxels",
-                    offset_voxels,
-                    "finite and >= 0",
-                )?;
-                check(
-                    (0.05..=4.0).contains(&step_factor),
-                    "shadow step_factor",
-                    step_factor,
-                    "in [0.05, 4]",
-                )?;
-                (true, offset_voxels, step_factor)
-            }
-            Shadows::PerLeaf(_) => {
-                return Err(Error::Unsupported {
-                    what: "per-leaf shadow visibilities in the GPU injection",
-                });
-            }
-        };
-        let (point, a, b) = match *light {
-            Light::Directional { to_light, irradiance } => {
-                if !(to_light.is_finite() && to_light.length() > 0.0) {
-                    return Err(voxlod_cone::Error::InvalidParameter {
-                        name: "to_light",
-                        value: to_light.length().to_string(),
-                        reason: "a finite non-zero direction",
-                    }
-                    .into());
-                }
-                (0.0, to_light, irradiance)
-            }
-            Light::Point { position, intensity } => (1.0, position, intensity),
-        };
-        if !(b.is_finite() && b.min_element() >= 0.0 && a.is_finite()) {
-            return Err(voxlod_cone::Error::InvalidParameter {
-                name: "light",
-                value: format!("{a} / {b}"),
-                reason: "finite, and >= 0 per channel",
-            }
-            .into());
-        }
-        let n = leaves.count;
-        let out =
-            ctx.storage_zeroed("injected radiance", n.max(1) * size_of::<AveragePayload>() as u64)?;
-        if n == 0 {
-            return Ok(out);
-        }
-        let geometry = tree
-            .payload
-            .as_ref()
-            .ok_or(Error::Unsupported { what: "an octree without payloads" })?;
-        let medium = self.convert(geometry, tree.node_count, false)?;
-        let cone_tree = GpuConeOctree::from_device(
-            ctx,
-            &tree.levels,
-            tree.nodes.clone(),
-            tree.tiles.clone(),
-            tree.tile_count,
-            medium,
-            *grid,
-            tree.depth,
-            tree.first_dense,
-        )?;
-        let cone = GpuConeParams {
-            grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
-            size: [0; 4],
-            tree: [tree.depth, tree.first_dense, 0, 0],
-            march: [0.0, step, 0.999, 0.0],
-            limits: [0.0; 4],
-            extra: [0.0; 4],
-        };
-        let ip = GpuInjectParams {
-            light_a: a.extend(point).to_array(),
-            light_b: b.extend(if march { 1.0 } else { 0.0 }).to_array(),
-            shadow: [offset, 0.0, 0.0, 0.0],
-            counts: [n as u32, 0, 0, 0],
-        };
-        let pipeline = self.inject_pipeline()?;
-        let ip_buf = ctx.uniform("inject params", bytemuck::bytes_of(&ip))?;
-        let mut keep = vec![ip_buf.clone()];
-        let mut encoder = ctx.device().create_command_encoder(&Default::default());
-        let (levels, nodes, tiles, payload) = cone_tree.buffers();
-        self.dispatch(
-            &mut encoder,
-            (pipeline, "dynamic inject"),
-            n,
-            bytemuck::bytes_of(&cone),
-            &[
-                (1, levels),
-                (2, nodes),
-                (3, tiles),
-                (4, payload),
-                (8, &ip_buf),
-                (9, &leaves.coords),
-                (10, &leaves.payload),
-                (11, &out),
-            ],
-            &mut keep,
-        )?;
-        ctx.submit("injecting light", encoder)?;
-        Ok(out)
-    }
-
     /// One whole frame on the device (module docs): places the objects on the host (the CPU's
     /// checks and errors), then transform, blend, octree, injection and the radiance octree.
     pub fn frame(
@@ -806,83 +596,4 @@ pub fn levels_of<'t>(tree: &'t GpuOctree) -> &'t [GpuLevel] {
 }
 
 #[cfg(test)]
-mod tests {
-    use std::mem::offset_of;
-
-    use super::*;
-    use crate::layout::assert_mirrors;
-
-    #[test]
-    fn dynamic_types_mirror_their_wgsl() {
-        for (_, src) in KERNELS {
-            assert_mirrors(
-                src,
-                "Params",
-                size_of::<GpuDynamicParams>(),
-                &[
-                    ("n", offset_of!(GpuDynamicParams, n)),
-                    ("filter_mode", offset_of!(GpuDynamicParams, filter_mode)),
-                    ("brick_log2", offset_of!(GpuDynamicParams, brick_log2)),
-                    ("extra", offset_of!(GpuDynamicParams, extra)),
-                    ("dims", offset_of!(GpuDynamicParams, dims)),
-                    ("min_weight", offset_of!(GpuDynamicParams, min_weight)),
-                ],
-            );
-            assert_mirrors(
-                src,
-                "Placed",
-                size_of::<Placed>(),
-                &[
-                    ("cell", offset_of!(Placed, cell)),
-                    ("frac", offset_of!(Placed, frac)),
-                    ("normal", offset_of!(Placed, normal)),
-                    ("status", offset_of!(Placed, status)),
-                ],
-            );
-        }
-        let (_, t) = KERNELS[TRANSFORM];
-        assert_mirrors(
-            t,
-            "Object",
-            size_of::<GpuObject>(),
-            &[
-                ("anchor", offset_of!(GpuObject, anchor)),
-                ("first_matrix", offset_of!(GpuObject, first_matrix)),
-                ("skinned", offset_of!(GpuObject, skinned)),
-                ("outside", offset_of!(GpuObject, outside)),
-                ("pad", offset_of!(GpuObject, pad)),
-            ],
-        );
-        assert_mirrors(t, "Affine", size_of::<voxlod_octree::dynamic::Affine>(), &[("m", 0)]);
-        let inject = inject_source();
-        assert!(
-            inject.contains("fn march(")
-                && !inject.contains("fn main(@builtin(global_invocation_id)")
-        );
-        assert_mirrors(
-            &inject,
-            "InjectParams",
-            size_of::<GpuInjectParams>(),
-            &[
-                ("light_a", offset_of!(GpuInjectParams, light_a)),
-                ("light_b", offset_of!(GpuInjectParams, light_b)),
-                ("shadow", offset_of!(GpuInjectParams, shadow)),
-                ("counts", offset_of!(GpuInjectParams, counts)),
-            ],
-        );
-        type C = GpuConeParams;
-        assert_mirrors(
-            &inject,
-            "Params",
-            size_of::<C>(),
-            &[
-                ("grid", offset_of!(C, grid)),
-                ("size", offset_of!(C, size)),
-                ("tree", offset_of!(C, tree)),
-                ("march", offset_of!(C, march)),
-                ("limits", offset_of!(C, limits)),
-                ("extra", offset_of!(C, extra)),
-            ],
-        );
-    }
-}
+mod tests;
