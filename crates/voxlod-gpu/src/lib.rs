@@ -148,8 +148,12 @@ pub mod voxelize;
 pub use context::{AdapterSummary, Context, adapters};
 pub use error::{Error, Result};
 
-/// WGSL shared by the cone and differential cone-tracing kernels: Morton codes of dense levels,
-/// a node's +axis neighbour on a sparse level and the descent to a node (`Octree::find`).
+/// Morton codes in WGSL (as `voxlod_format::morton`), prepended to the octree-build, dynamic,
+/// cone, differential and light-injection kernels.
+pub const MORTON_WGSL: &str = include_str!("morton.wgsl");
+/// WGSL shared by the cone, differential and light-injection kernels (after [`MORTON_WGSL`]):
+/// a node's +axis neighbour on a sparse level, the descent to a node (`Octree::find`) and the
+/// eight nodes around a sample (`Octree::corners`).
 pub const OCTREE_WALK_WGSL: &str = include_str!("octree_walk.wgsl");
 
 /// The README's example, compiled and run as a doc test.

@@ -1,21 +1,7 @@
-// Finding octree nodes from WGSL: Morton codes of dense levels, the +axis neighbour on a sparse
-// level (FlatOctree::neighbour) and the descent to a node (Octree::find). Shared by the cone and
-// differential cone-tracing kernels; the including kernel declares `Level`, `NONE`, `params`
+// Finding octree nodes from WGSL (after morton.wgsl): the +axis neighbour on a sparse level
+// (FlatOctree::neighbour), the descent to a node (Octree::find) and the eight nodes around a
+// sample (Octree::corners). Shared by the cone, differential and light-injection kernels; the including kernel declares `Level`, `NONE`, `params`
 // (with `tree.y` the finest dense level) and the `levels`, `nodes` and `tiles` buffers.
-
-fn part1by2(x: u32) -> u32 {
-    var v = x & 0x3ffu;
-    v = (v | (v << 16u)) & 0x030000ffu;
-    v = (v | (v << 8u)) & 0x0300f00fu;
-    v = (v | (v << 4u)) & 0x030c30c3u;
-    v = (v | (v << 2u)) & 0x09249249u;
-    return v;
-}
-
-// Morton code of a node of a dense level (at most 256 per axis: 24 bits).
-fn morton(c: vec3<u32>) -> u32 {
-    return part1by2(c.x) | (part1by2(c.y) << 1u) | (part1by2(c.z) << 2u);
-}
 
 // FlatOctree::neighbour on a sparse level: the +axis neighbour of global node `node`.
 fn sparse_neighbour(lv: Level, node: u32, axis: u32) -> u32 {
@@ -48,4 +34,31 @@ fn find(level: u32, c: vec3<u32>) -> u32 {
         idx = child + o.x + 2u * o.y + 4u * o.z;
     }
     return idx;
+}
+
+// Octree::corners: the nodes of `level` (`res` nodes per axis) at `s + (x, y, z)` for x, y, z in
+// {0, 1}, indexed by x + 2y + 4z; NONE where there is none.
+fn corners(level: u32, s: vec3<u32>, res: u32) -> array<u32, 8> {
+    let lv = levels[level];
+    var n: array<u32, 8>;
+    if lv.dense == 1u {
+        for (var e = 0u; e < 8u; e += 1u) {
+            let c = s + vec3<u32>(e & 1u, (e >> 1u) & 1u, (e >> 2u) & 1u);
+            if all(c < vec3<u32>(res)) {
+                n[e] = lv.first + morton(c);
+            } else {
+                n[e] = NONE;
+            }
+        }
+    } else {
+        n[0] = find(level, s);
+        n[1] = sparse_neighbour(lv, n[0], 0u);
+        n[2] = sparse_neighbour(lv, n[0], 1u);
+        n[4] = sparse_neighbour(lv, n[0], 2u);
+        n[3] = sparse_neighbour(lv, n[1], 1u);
+        n[5] = sparse_neighbour(lv, n[1], 2u);
+        n[6] = sparse_neighbour(lv, n[2], 2u);
+        n[7] = sparse_neighbour(lv, n[3], 2u);
+    }
+    return n;
 }

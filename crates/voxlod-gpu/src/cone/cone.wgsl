@@ -101,29 +101,7 @@ fn sample_level(pos: vec3<f32>, level: u32) -> Payload {
     let f = u - lower;
     let start = max(base, vec3<i32>(0));
     let s = vec3<u32>(start);
-    let lv = levels[level];
-    // The corner nodes, indexed by their offset x + 2y + 4z from `start` (Octree::corners).
-    var n: array<u32, 8>;
-    if lv.dense == 1u {
-        let r = u32(res);
-        for (var e = 0u; e < 8u; e += 1u) {
-            let c = s + vec3<u32>(e & 1u, (e >> 1u) & 1u, (e >> 2u) & 1u);
-            if all(c < vec3<u32>(r)) {
-                n[e] = lv.first + morton(c);
-            } else {
-                n[e] = NONE;
-            }
-        }
-    } else {
-        n[0] = find(level, s);
-        n[1] = sparse_neighbour(lv, n[0], 0u);
-        n[2] = sparse_neighbour(lv, n[0], 1u);
-        n[4] = sparse_neighbour(lv, n[0], 2u);
-        n[3] = sparse_neighbour(lv, n[1], 1u);
-        n[5] = sparse_neighbour(lv, n[1], 2u);
-        n[6] = sparse_neighbour(lv, n[2], 2u);
-        n[7] = sparse_neighbour(lv, n[3], 2u);
-    }
+    var n = corners(level, s, u32(res));
     for (var e = 0u; e < 8u; e += 1u) {
         let off = vec3<i32>(i32(e & 1u), i32((e >> 1u) & 1u), i32((e >> 2u) & 1u));
         let c = base + off;

@@ -89,7 +89,7 @@ pub const DIRECTIONAL_WGSL: &str = include_str!("directional.wgsl");
 /// The kernel's whole source for a payload kind.
 pub fn source(directional: bool) -> String {
     let payload = if directional { DIRECTIONAL_WGSL } else { ISOTROPIC_WGSL };
-    format!("{payload}\n{}\n{WGSL}", crate::OCTREE_WALK_WGSL)
+    format!("{payload}\n{}\n{}\n{WGSL}", crate::MORTON_WGSL, crate::OCTREE_WALK_WGSL)
 }
 
 /// Shading points per dispatch, at most (whole rows; a bound on a dispatch's duration).

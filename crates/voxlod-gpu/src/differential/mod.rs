@@ -46,8 +46,9 @@ pub const PROBE_WGSL: &str = include_str!("probe.wgsl");
 /// The renderer's whole source.
 pub fn source() -> String {
     format!(
-        "{SMITH_WGSL}\n{}\n{}\n{WGSL}",
+        "{SMITH_WGSL}\n{}\n{}\n{}\n{WGSL}",
         include_str!("../shading.wgsl"),
+        crate::MORTON_WGSL,
         crate::OCTREE_WALK_WGSL
     )
 }

@@ -31,37 +31,6 @@ fn flat_index(wg: vec3<u32>, nwg: vec3<u32>, li: u32) -> u32 {
     return (wg.y * nwg.x + wg.x) * WG + li;
 }
 
-fn part1by2(x: u32) -> u32 {
-    var v = x & 0x3ffu;
-    v = (v | (v << 16u)) & 0x030000ffu;
-    v = (v | (v << 8u)) & 0x0300f00fu;
-    v = (v | (v << 4u)) & 0x030c30c3u;
-    v = (v | (v << 2u)) & 0x09249249u;
-    return v;
-}
-
-fn compact1by2(x: u32) -> u32 {
-    var v = x & 0x09249249u;
-    v = (v | (v >> 2u)) & 0x030c30c3u;
-    v = (v | (v >> 4u)) & 0x0300f00fu;
-    v = (v | (v >> 8u)) & 0xff0000ffu;
-    v = (v | (v >> 16u)) & 0x000003ffu;
-    return v;
-}
-
-// Morton code of a coordinate below 2^10 per axis (x in bit 0, as voxlod_format::morton).
-fn morton(c: vec3<u32>) -> u32 {
-    return part1by2(c.x) | (part1by2(c.y) << 1u) | (part1by2(c.z) << 2u);
-}
-
-fn demorton(m: u32) -> vec3<u32> {
-    return vec3<u32>(compact1by2(m), compact1by2(m >> 1u), compact1by2(m >> 2u));
-}
-
-fn octant(c: vec3<u32>) -> u32 {
-    return (c.x & 1u) | ((c.y & 1u) << 1u) | ((c.z & 1u) << 2u);
-}
-
 // blend.rs's `corner`: world voxel (xyz) and weight (w) of corner k of a placed voxel.
 fn corner(p: Placed, k: u32) -> vec4<i32> {
     let c = vec3<i32>(p.cell[0], p.cell[1], p.cell[2]);

@@ -19,8 +19,9 @@ pub fn inject_source() -> String {
     let cone = crate::cone::WGSL;
     let functions = cone.find("@compute").map_or(cone, |at| &cone[..at]);
     format!(
-        "{}\n{}\n{functions}\n{}",
+        "{}\n{}\n{}\n{functions}\n{}",
         crate::cone::ISOTROPIC_WGSL,
+        crate::MORTON_WGSL,
         crate::OCTREE_WALK_WGSL,
         include_str!("inject.wgsl")
     )

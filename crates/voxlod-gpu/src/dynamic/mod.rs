@@ -69,12 +69,12 @@ pub use inject::inject_source;
 pub use params::{GpuDynamicParams, GpuInjectParams, GpuObject};
 
 /// The WGSL shared by the dynamic kernels (mirrors of [`Placed`] and [`GpuDynamicParams`],
-/// Morton codes, corners, 64-bit helpers).
+/// corners, 64-bit helpers; after [`crate::MORTON_WGSL`]).
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");
 
 macro_rules! kernel {
     ($file:literal) => {
-        concat!(include_str!("common.wgsl"), include_str!($file))
+        concat!(include_str!("../morton.wgsl"), include_str!("common.wgsl"), include_str!($file))
     };
 }
 

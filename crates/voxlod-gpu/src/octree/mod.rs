@@ -89,11 +89,11 @@ use input::{Input, check_input};
 
 /// The WGSL shared by every kernel: the mirrors of [`GpuNode`](voxlod_octree::GpuNode),
 /// [`GpuTile`](voxlod_octree::GpuTile), [`GpuLevel`](voxlod_octree::GpuLevel),
-/// [`AveragePayload`] (`Average`) and [`GpuOctreeParams`], and Morton codes.
+/// [`AveragePayload`] (`Average`) and [`GpuOctreeParams`] (after [`crate::MORTON_WGSL`]).
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");
 
 macro_rules! kernel {
-    ($($file:literal),*) => { concat!(include_str!("common.wgsl"), $(include_str!($file)),*) };
+    ($($file:literal),*) => { concat!(include_str!("../morton.wgsl"), include_str!("common.wgsl"), $(include_str!($file)),*) };
 }
 
 /// The kernels' sources, `(name, WGSL)`, in the order of [`OctreeBuilder`]'s pipelines.
