@@ -4,13 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn voxlod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_voxlod"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("the voxlod binary runs")
-}
+use crate::voxlod;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("voxlod-cli-{name}-{}", std::process::id()));

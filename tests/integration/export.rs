@@ -2,18 +2,12 @@
 //! `.vox` and Mitsuba 3 `.vol`, read back with voxlod-format's readers.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use glam::{DVec3, UVec3};
 use voxlod::format::{Occupancy, vol, vox, vxl};
 
-fn voxlod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_voxlod"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("the voxlod binary runs")
-}
+use crate::voxlod;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("voxlod-export-{name}-{}", std::process::id()));

@@ -1,5 +1,7 @@
 //! End-to-end and cross-crate tests of voxlod, in one test binary (one link on 2-core CI).
 
+use std::process::{Command, Output};
+
 mod cli;
 mod cone;
 mod dynamic;
@@ -16,4 +18,13 @@ pub fn json_result(stdout: &[u8], command: &str) -> serde_json::Value {
     assert_eq!(v["schema_version"], 1, "{v}");
     assert_eq!(v["command"], command, "{v}");
     v["result"].take()
+}
+
+/// Runs the voxlod binary with `args` and `--quiet`.
+pub fn voxlod(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_voxlod"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .expect("the voxlod binary runs")
 }

@@ -2,15 +2,7 @@
 //! and `slicemap.json` on disk, the preset's scenes without a scene argument, and one-line
 //! errors for bad arguments.
 
-use std::process::Command;
-
-fn voxlod(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_voxlod"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("the voxlod binary runs")
-}
+use crate::voxlod;
 
 #[test]
 fn slicemap_measures_holes_shadows_and_thickness() {

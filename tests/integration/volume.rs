@@ -1,15 +1,7 @@
 //! `voxlod volume` end to end on a tiny setting: the tables' JSON, the report on
 //! disk, and a one-line error for an unknown preset.
 
-use std::process::Command;
-
-fn voxlod(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_voxlod"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("the voxlod binary runs")
-}
+use crate::voxlod;
 
 #[test]
 fn volume_preset_writes_the_report_and_measures_the_trade() {
