@@ -83,3 +83,35 @@ impl<'a> GroundTruths<'a> {
         Ok(&self.by_size.last().expect("just pushed").1)
     }
 }
+
+/// A seed-0 ground truth, its render time, and the MSE of an independent second seed against
+/// it (8-bit sRGB): half of that estimates the truth's own error.
+pub(crate) struct SeededTruth {
+    /// The seed-0 render.
+    pub(crate) truth: voxlod_cpu::render::ground_truth::GroundTruth,
+    /// Its image in 8-bit sRGB.
+    pub(crate) srgb8: voxlod_scene::Srgb8Image,
+    /// Seed-0 render time, ms.
+    pub(crate) ms: f64,
+    /// MSE of seed 1 against seed 0.
+    pub(crate) seed_mse: f64,
+}
+
+/// Renders the ground truth of `camera` with `options` at seeds 0 and 1 (`options.seed` is
+/// ignored) and compares them.
+pub(crate) fn seeded_truth(
+    scene: &voxlod_scene::Scene,
+    geometry: &voxlod_scene::Geometry,
+    bvh: &voxlod_cpu::raycast::Bvh,
+    camera: &voxlod_scene::Camera,
+    options: &voxlod_cpu::render::ground_truth::Options,
+) -> Result<SeededTruth, Error> {
+    use voxlod_cpu::render::ground_truth::{Options, render};
+    let t = std::time::Instant::now();
+    let truth = render(scene, geometry, bvh, camera, &Options { seed: 0, ..*options })?;
+    let ms = crate::spread::ms(t.elapsed());
+    let srgb8 = truth.image.to_srgb8();
+    let second = render(scene, geometry, bvh, camera, &Options { seed: 1, ..*options })?;
+    let seed_mse = voxlod_eval::mse(&second.image.to_srgb8(), &srgb8)?;
+    Ok(SeededTruth { truth, srgb8, ms, seed_mse })
+}

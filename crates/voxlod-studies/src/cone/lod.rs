@@ -30,6 +30,7 @@ use voxlod_octree::{AveragePayload, BuildOptions, Directional, Octree};
 use voxlod_scene::{Image, MaterialSample, Srgb8Image};
 
 use crate::Error;
+use crate::ground_truths::{SeededTruth, seeded_truth};
 
 /// What the LOD measurement renders.
 #[derive(Clone, Debug, PartialEq)]
@@ -197,21 +198,17 @@ pub fn run(config: &LodConfig, say: &dyn Fn(&str)) -> Result<LodResult, Error> {
     let mut camera = scene.default_camera()?;
     camera.eye = camera.target + (camera.eye - camera.target) * config.zoom_out;
     let size = config.image_size;
-    let gt_options = |seed| ground_truth::Options {
+    let gt_options = ground_truth::Options {
         width: size,
         height: size,
         spp: config.spp,
-        seed,
+        seed: 0,
         ambient: Vec3::splat(AMBIENT),
         shadows: true,
         light_filter: None,
     };
-    let t = Instant::now();
-    let truth = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt_options(0))?;
-    let truth_ms = ms(t);
-    let truth_img = truth.image.to_srgb8();
-    let noise = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt_options(1))?;
-    let truth_seed_mse = voxlod_eval::mse(&noise.image.to_srgb8(), &truth_img)?;
+    let SeededTruth { srgb8: truth_img, ms: truth_ms, seed_mse: truth_seed_mse, .. } =
+        seeded_truth(&scene, &geometry, &bvh, &camera, &gt_options)?;
 
     say(&format!("{}: voxelizing and building the octree at {}³", config.scene, config.resolution));
     let (lo, hi) = scene.bounds()?;

@@ -26,6 +26,7 @@ use super::{
 };
 use crate::Error;
 use crate::backend::Backend;
+use crate::ground_truths::{SeededTruth, seeded_truth};
 
 /// Ambient term of the voxel shading and the ground truth (as the other studies use).
 const AMBIENT: f32 = 0.1;
@@ -324,21 +325,17 @@ fn run_scene(
         say(&format!("{}: zoom {zoom}", case.label));
         let mut camera = base;
         camera.eye = camera.target + (camera.eye - camera.target) * zoom;
-        let gt = |seed| ground_truth::Options {
+        let gt = ground_truth::Options {
             width: size,
             height: size,
             spp: config.spp,
-            seed,
+            seed: 0,
             ambient: Vec3::splat(AMBIENT),
             shadows: true,
             light_filter: None,
         };
-        let t = Instant::now();
-        let truth = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt(0))?;
-        let truth_ms = ms(t);
-        let truth8 = truth.image.to_srgb8();
-        let second = ground_truth::render(&scene, &geometry, &bvh, &camera, &gt(1))?;
-        let truth_seed_mse = voxlod_eval::mse(&second.image.to_srgb8(), &truth8)?;
+        let SeededTruth { truth, srgb8: truth8, ms: truth_ms, seed_mse: truth_seed_mse } =
+            seeded_truth(&scene, &geometry, &bvh, &camera, &gt)?;
         let cam = pinhole(&camera, size);
         let probe = DifferentialRenderer::new(&micro, cam, frame.light, Default::default())?;
         let footprint_voxels =
