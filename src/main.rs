@@ -39,6 +39,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Render(a) => commands::render(&ui, a),
         cli::Command::CompareImages(a) => commands::compare_images(a),
         cli::Command::Compare(a) => commands::compare(&ui, a),
+        cli::Command::Ablation(a) => commands::ablation(&ui, a),
         cli::Command::Cone(a) => commands::cone(&ui, a),
         cli::Command::Dynamic(a) => commands::dynamic(&ui, a),
         cli::Command::HeitzNeyret(a) => commands::heitz_neyret(&ui, a),

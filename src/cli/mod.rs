@@ -37,8 +37,12 @@ pub enum Command {
     /// Compare two images: MSE, PSNR, SSIM on 8-bit sRGB.
     CompareImages(CompareArgs),
     /// Measure every filtered-appearance representation of a scene against its ground truth:
-    /// error, memory, precompute and render time, as tables, plots and an image grid.
+    /// error, memory, precompute and render time, as tables, plots and an image grid
+    /// (`--setup paper`: under the HPG 2023 paper's conditions, with paired intervals).
     Compare(CompareSceneArgs),
+    /// Ablate the paper setup of the filtered-appearance comparison: one deviation at a time,
+    /// each method's change with a paired bootstrap interval, and which method renders best.
+    Ablation(AblationArgs),
     /// Voxel cone tracing on a sparse voxel octree: AO and one-bounce indirect light against
     /// ray-traced references, over cone count × aperture × octree depth × step, and light leaking.
     Cone(ConeArgs),
@@ -212,18 +216,26 @@ pub struct RenderArgs {
 /// `voxlod compare`.
 #[derive(Debug, Args)]
 pub struct CompareSceneArgs {
-    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
+    /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`; with `--setup
+    /// paper` also a paper scene's name (`voxlod compare --setup paper --help` lists them) or
+    /// `paper` for all of them.
     pub scene: String,
+    /// The conditions: voxlod's default comparison, or the HPG 2023 paper's (white background,
+    /// sun and point light, image side = resolution, 1024 rays per pixel, paired intervals over
+    /// views × seeds).
+    #[arg(long, value_enum, default_value_t = SetupArg::Default)]
+    pub setup: SetupArg,
     /// Voxel resolutions (voxels along the longest axis, 1..=4096), comma-separated.
     #[arg(long, default_value = "128,256", value_delimiter = ',', num_args = 1..,
           value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub res: Vec<u32>,
-    /// The higher image side rendered besides the one equal to each resolution (0: none).
+    /// The higher image side rendered besides the one equal to each resolution (0: none; the
+    /// default setup only).
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(0..=8192))]
     pub image: u32,
-    /// Rays per pixel of the ground truth.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
-    pub spp: u32,
+    /// Rays per pixel of the ground truth (default: 256, 1024 with `--setup paper`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
     /// Viewpoints (the scene's camera orbited about the vertical axis).
     #[arg(long, default_value_t = 4, value_parser = parse::at_least_one)]
     pub views: usize,
@@ -234,9 +246,12 @@ pub struct CompareSceneArgs {
     #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',',
           value_parser = parse::non_negative_f32)]
     pub thresholds: Vec<f32>,
+    #[command(flatten)]
+    pub paper: PaperArgs,
     /// Where to render the images that have a GPU kernel (gpu: the ground truth — every
     /// material, textures and alpha included —, the baseline, Averages and [VJK21], the virtual
-    /// mesh and Adaptive). Every row says which backend rendered it.
+    /// mesh and Adaptive). Every row says which backend rendered it. The paper setup runs on
+    /// the CPU.
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
     /// Output directory.
@@ -245,6 +260,85 @@ pub struct CompareSceneArgs {
     /// Print the rows as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The conditions of `voxlod compare`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SetupArg {
+    /// voxlod's comparison: the scene's light and background, a second image side.
+    Default,
+    /// The HPG 2023 paper's conditions.
+    Paper,
+}
+
+/// Options of the paper setup (`voxlod compare --setup paper`, `voxlod ablation`).
+#[derive(Debug, Args)]
+pub struct PaperArgs {
+    /// Seeds of the precompute's sampling lines (paired samples = views × seeds).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub seeds: u32,
+    /// The coarse-mesh counterpart of a scene given as a spec (paper scenes have their own).
+    #[arg(long)]
+    pub coarse: Option<String>,
+    /// Directory of cached ground truths (default: $XDG_CACHE_HOME/voxlod/ground-truth, else
+    /// ~/.cache/voxlod/ground-truth).
+    #[arg(long, conflicts_with = "no_cache")]
+    pub cache: Option<PathBuf>,
+    /// Render every ground truth, read and write no cache.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+/// `voxlod ablation`.
+#[derive(Debug, Args)]
+pub struct AblationArgs {
+    /// A paper scene's name, `paper` for all of them, or a scene spec.
+    pub scene: String,
+    /// Voxel resolutions (= image sides), comma-separated.
+    #[arg(long, default_value = "128", value_delimiter = ',', num_args = 1..,
+          value_parser = clap::value_parser!(u32).range(11..=1024))]
+    pub res: Vec<u32>,
+    /// The deviations to run (default: all), comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', num_args = 1..)]
+    pub toggles: Vec<ToggleArg>,
+    /// Rays per pixel of the ground truth.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: u32,
+    /// Viewpoints.
+    #[arg(long, default_value_t = 4, value_parser = parse::at_least_one)]
+    pub views: usize,
+    /// Sampling rays per voxel.
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rays: u32,
+    /// Adaptive thresholds (finite, ≥ 0), comma-separated.
+    #[arg(long, default_value = "0.1", value_delimiter = ',',
+          value_parser = parse::non_negative_f32)]
+    pub thresholds: Vec<f32>,
+    #[command(flatten)]
+    pub paper: PaperArgs,
+    /// Output directory.
+    #[arg(short, long, default_value = "out/ablation")]
+    pub output: PathBuf,
+    /// Print the result as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// A deviation from the paper setup.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ToggleArg {
+    /// The scene's coarse mesh.
+    CoarseMesh,
+    /// The red background of the paper's Fig. 10.
+    RedBackground,
+    /// The scene's own background.
+    SceneBackground,
+    /// The sun alone.
+    SunOnly,
+    /// voxlod's line-sampled directional opacity.
+    LinesOpacity,
+    /// Scores on images cropped to the ground truth's coverage.
+    Crop,
 }
 
 /// `voxlod cone`.

@@ -4,14 +4,18 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use voxlod::studies::filtered::FilteredConfig;
+use voxlod::studies::paper::{self, PaperConfig};
 use voxlod::studies::report::{self, Config, SceneCase};
 
 use super::{Ui, backend, print_json};
-use crate::cli::CompareSceneArgs;
+use crate::cli::{BackendArg, CompareSceneArgs, SetupArg};
 
 /// Runs the comparison, writes `<output>/report.md` (+ images, plots, JSON) and prints the
 /// tables.
 pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
+    if args.setup == SetupArg::Paper {
+        return compare_paper(ui, args);
+    }
     let filtered = FilteredConfig {
         resolutions: args.res.clone(),
         higher_image: (args.image > 0).then_some(args.image),
@@ -23,7 +27,7 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         scenes: vec![SceneCase::new(&args.scene, "scene")],
         resolutions: args.res.clone(),
         image_size: args.res[0],
-        gt_spp: args.spp,
+        gt_spp: args.spp.unwrap_or(256),
         views: args.views,
         section_budget: Duration::MAX,
         filtered: Some(filtered),
@@ -67,5 +71,47 @@ pub fn compare(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         written.markdown.display(),
         outcome.elapsed.as_secs_f64()
     );
+    Ok(())
+}
+
+/// `--setup paper`: the paper's conditions on the named scenes (CPU), paired intervals.
+fn compare_paper(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
+    if args.backend != BackendArg::Cpu {
+        anyhow::bail!("--setup paper runs on the CPU (the reference): drop --backend gpu");
+    }
+    let config = PaperConfig {
+        scenes: paper::scenes_named(&args.scene, args.paper.coarse.clone()),
+        resolutions: args.res.clone(),
+        gt_spp: args.spp.unwrap_or(1024),
+        views: args.views,
+        seeds: args.paper.seeds,
+        rays: args.rays,
+        thresholds: args.thresholds.clone(),
+        cache: super::ablation::cache_dir(&args.paper),
+        command: super::invocation(),
+        ..PaperConfig::full()
+    };
+    let spinner = ui.spinner();
+    let progress = |msg: &str| spinner.set_message(msg.to_string());
+    let result = paper::run(&config, &progress)
+        .with_context(|| format!("comparing '{}' under the paper's conditions", args.scene))?;
+    let written = super::write_report("voxlod compare --setup paper", &args.output, |r| {
+        result.add_to_report(r, &config)
+    })?;
+    let json = serde_json::to_vec_pretty(&result)?;
+    let json_path = args.output.join("paper.json");
+    voxlod::format::io::write_atomic(&json_path, |w| w.write_all(&json))
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    spinner.finish_and_clear();
+    if args.json {
+        return print_json("compare", &result);
+    }
+    for c in &result.cases {
+        println!("\n{}", paper::findings(c));
+    }
+    for table in result.tables()? {
+        println!("\n{}", table.to_markdown());
+    }
+    println!("\nreport written to {} in {:.1} s", written.markdown.display(), result.wall_ms / 1e3);
     Ok(())
 }

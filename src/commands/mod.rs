@@ -1,6 +1,7 @@
 //! The `voxlod` subcommands. Each prints a human summary (or JSON with `--json`), writes its
 //! outputs atomically, and returns errors with context for `main` to print.
 
+mod ablation;
 mod compare;
 mod cone;
 mod dynamic;
@@ -19,6 +20,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+pub use ablation::ablation;
 pub use compare::compare;
 pub use cone::cone;
 pub use dynamic::dynamic;

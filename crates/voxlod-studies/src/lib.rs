@@ -107,6 +107,7 @@ pub mod filtered;
 mod ground_truths;
 pub mod heitz_neyret;
 pub mod machine;
+pub mod paper;
 pub mod report;
 pub mod scenes;
 pub mod slicemap;

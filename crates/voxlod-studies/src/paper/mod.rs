@@ -1,0 +1,714 @@
+//! The filtered-appearance comparison under the conditions of Brito, Poulin and Teichrieb (2023,
+//! §5 and Table 1), and its ablation: one deviation from those conditions at a time, each
+//! method's change measured on paired samples with a bootstrap interval.
+//!
+//! # The paper setup ([`Variant::paper`])
+//! - **Scenes** of the paper's kinds at its triangle counts (10⁵–10⁶; [`PaperScene`]): a dense
+//!   surface's triangles are small against a voxel, which is where the representations differ.
+//! - **Lighting** ([`Lighting::SunAndPoint`]): the scene's sun and a point light, as in the
+//!   authors' code; **background** white ([`Background::White`], red as the option of their
+//!   Fig. 10).
+//! - **Images** at a side equal to the voxel resolution (128³ → 128²), the ground truth at 1024
+//!   rays per pixel box-filtered; scores on the whole image (the paper crops empty space for
+//!   display but does not say whether its scores were cropped: [`Variant::crop`] measures it).
+//! - **Methods**: Averages, \[VJK21\] (SGGX + non-exponential transmittance), the paper's
+//!   virtual mesh with its opacity subgrid read by [`Variant::rule`], and Adaptive at each
+//!   threshold of [`PaperConfig::thresholds`].
+//!
+//! # Samples and intervals
+//! Every method is scored on `views × seeds` paired samples: the same cameras and, per seed,
+//! the same precompute lines (the only random source of the representations; the ground truth is
+//! seed 0, its own error is estimated from seed 1 and reported). Differences between methods,
+//! and between a variant and the paper setup, are paired per sample and carry the 95 %
+//! bootstrap interval of [`stats::PairedDiff`]; a difference is called only when that interval
+//! excludes zero.
+//!
+//! Ground truths are cached on disk by their inputs ([`cache::TruthCache`]): the variants that
+//! keep the scene, lights and background score against the same images.
+
+pub mod ablation;
+pub mod cache;
+pub mod lighting;
+pub mod stats;
+mod tables;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use glam::Vec3;
+use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::line_sampler::SamplingContext;
+use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+use voxlod_cpu::appearance::subgrid::DirectionalRule;
+use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
+use voxlod_cpu::raycast::Bvh;
+use voxlod_cpu::render::{filtered, ground_truth};
+use voxlod_cpu::voxelize::{self, Mode};
+use voxlod_eval::report::LabeledImage;
+use voxlod_format::GridSpec;
+use voxlod_scene::{Camera, Image, Scene, Srgb8Image};
+
+pub use cache::TruthCache;
+pub use lighting::{Background, Lighting};
+pub use stats::PairedDiff;
+pub use tables::{PAPER_TABLE_1, findings};
+
+use crate::Error;
+use crate::spread::ms;
+use crate::views::orbit_views;
+
+/// A scene of the paper setup: its dense spec (the setup's) and a coarse one (the mesh-density
+/// deviation), and the paper scene it stands for, if any.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PaperScene {
+    /// Label in tables.
+    pub label: String,
+    /// The scene spec of the setup (dense triangles).
+    pub spec: String,
+    /// The same scene with coarse triangles (None: the mesh-density variant is not run).
+    pub coarse: Option<String>,
+    /// The scene of the paper's Table 1 it corresponds to.
+    pub paper: Option<String>,
+}
+
+/// The embedded bunny subdivided to the paper's order of triangles (Loop, 3 674·4³ = 235 136
+/// triangles; the paper's has 144 k), with the original as the coarse variant.
+pub fn dense_bunny() -> PaperScene {
+    PaperScene {
+        label: "bunny".into(),
+        spec: "builtin:bunny?subdivide=3&subdivision=loop".into(),
+        coarse: Some("builtin:bunny".into()),
+        paper: Some("Bunny".into()),
+    }
+}
+
+/// The scenes of the paper setup, standing for the paper's Bunny, Trees, Island and City (its
+/// Bistro is not built: a textured interior of 3.4 M triangles we cannot ship).
+pub fn paper_scenes() -> Vec<PaperScene> {
+    let scene = |label: &str, paper: &str, spec: &str, coarse: &str| PaperScene {
+        label: label.into(),
+        spec: spec.into(),
+        coarse: Some(coarse.into()),
+        paper: Some(paper.into()),
+    };
+    vec![
+        dense_bunny(),
+        scene(
+            "trees",
+            "Trees",
+            "builtin:forest?trees=12&leaves=40000",
+            "builtin:forest?trees=12&leaves=4000&cluster=4",
+        ),
+        scene(
+            "island",
+            "Island",
+            "builtin:island?grass=100000",
+            "builtin:island?grass=10000&terrain=64",
+        ),
+    ]
+}
+
+/// The scenes a command names: `paper` (all of [`paper_scenes`]), one of their labels, or any
+/// scene spec (with `coarse` as its coarse counterpart).
+pub fn scenes_named(name: &str, coarse: Option<String>) -> Vec<PaperScene> {
+    if name == "paper" {
+        return paper_scenes();
+    }
+    if let Some(s) = paper_scenes().into_iter().find(|s| s.label == name) {
+        return vec![PaperScene { coarse: coarse.or(s.coarse), ..s }];
+    }
+    let label = name.strip_prefix(crate::scenes::BUILTIN_PREFIX).unwrap_or(name);
+    let label = label.split(['?', '/']).next_back().unwrap_or(label).to_string();
+    vec![PaperScene { label, spec: name.into(), coarse, paper: None }]
+}
+
+/// How one run deviates from the paper setup (or not: [`Variant::paper`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Variant {
+    /// Name in tables ("paper setup" or what was toggled).
+    pub name: String,
+    /// Whether the scene's coarse spec is used.
+    pub coarse: bool,
+    /// Background.
+    pub background: Background,
+    /// Lights.
+    pub lighting: Lighting,
+    /// How the virtual mesh's opacity subgrid is read along a direction.
+    #[serde(serialize_with = "ser_debug")]
+    pub rule: DirectionalRule,
+    /// Whether scores are computed on the images cropped to the ground truth's coverage
+    /// (bounding box of pixels with any coverage, one pixel of margin, at least the SSIM window).
+    pub crop: bool,
+}
+
+impl Variant {
+    /// The paper's conditions.
+    pub fn paper() -> Self {
+        Self {
+            name: "paper setup".into(),
+            coarse: false,
+            background: Background::White,
+            lighting: Lighting::SunAndPoint,
+            rule: DirectionalRule::Circles,
+            crop: false,
+        }
+    }
+}
+
+/// Settings of a paper-setup run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaperConfig {
+    /// Scenes.
+    pub scenes: Vec<PaperScene>,
+    /// Voxel resolutions; each is rendered at an image side equal to it.
+    pub resolutions: Vec<u32>,
+    /// Rays per pixel of the ground truth (the paper's 1024).
+    pub gt_spp: u32,
+    /// Views per scene (the scene's camera orbited about the vertical axis).
+    pub views: usize,
+    /// Seeds of the precompute's sampling lines.
+    pub seeds: u32,
+    /// Sampling rays per voxel (the paper's 150).
+    pub rays: u32,
+    /// Adaptive thresholds, one method each.
+    pub thresholds: Vec<f32>,
+    /// Ambient term of the shading.
+    pub ambient: Vec3,
+    /// Where ground truths are cached (None: rendered every time).
+    pub cache: Option<PathBuf>,
+    /// The command line that reproduces the run.
+    pub command: String,
+}
+
+impl PaperConfig {
+    /// The paper's scale: 128³ and 256³, 1024 rays per pixel, four views, two seeds.
+    pub fn full() -> Self {
+        Self {
+            scenes: vec![dense_bunny()],
+            resolutions: vec![128, 256],
+            gt_spp: 1024,
+            views: 4,
+            seeds: 2,
+            rays: 150,
+            thresholds: vec![0.1],
+            ambient: Vec3::splat(0.1),
+            cache: None,
+            command: String::new(),
+        }
+    }
+
+    /// A smoke version for tests: the coarse bunny at 32³, two views, 16 rays per pixel.
+    pub fn smoke() -> Self {
+        Self {
+            scenes: vec![PaperScene {
+                label: "bunny".into(),
+                spec: "builtin:bunny".into(),
+                coarse: Some("builtin:sphere?subdiv=2".into()),
+                paper: Some("Bunny".into()),
+            }],
+            resolutions: vec![32],
+            gt_spp: 16,
+            views: 2,
+            rays: 32,
+            ..Self::full()
+        }
+    }
+
+    /// Checks every field (named in the error).
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, value: String, expected: &'static str| {
+            Err(Error::InvalidConfig { study: "paper setup", field, value, expected })
+        };
+        if self.scenes.is_empty() {
+            return bad("scenes", "[]".into(), "at least one scene");
+        }
+        if self.resolutions.is_empty() {
+            return bad("resolutions", "[]".into(), "at least one resolution");
+        }
+        for &r in &self.resolutions {
+            if !(voxlod_eval::ssim::SSIM_WINDOW..=1024).contains(&r) {
+                return bad(
+                    "resolutions",
+                    r.to_string(),
+                    "in 11..=1024 (the image side is the resolution, at least the SSIM window)",
+                );
+            }
+        }
+        if self.gt_spp == 0 {
+            return bad("gt_spp", "0".into(), "at least 1 ray per pixel");
+        }
+        if self.views == 0 {
+            return bad("views", "0".into(), "at least 1 view");
+        }
+        if self.seeds == 0 {
+            return bad("seeds", "0".into(), "at least 1 seed");
+        }
+        if self.rays == 0 {
+            return bad("rays", "0".into(), "at least 1 sampling ray per voxel");
+        }
+        for &t in &self.thresholds {
+            if !(t.is_finite() && t >= 0.0) {
+                return bad("thresholds", t.to_string(), "finite and >= 0");
+            }
+        }
+        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+            return bad("ambient", format!("{}", self.ambient), "finite and >= 0 per channel");
+        }
+        Ok(())
+    }
+}
+
+/// One method's scores in one case, sample by sample (`seed`-major, then view).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MethodScores {
+    /// The method.
+    pub method: String,
+    /// Packed bytes per voxel the renderer reads (records and index), seed 0.
+    pub bytes_per_voxel: f64,
+    /// Precompute time (sampling + fit) of seed 0, ms.
+    pub precompute_ms: f64,
+    /// Mean render time per frame (all lights), ms.
+    pub render_ms: f64,
+    /// MSE per sample.
+    pub mse: Vec<f64>,
+    /// SSIM per sample.
+    pub ssim: Vec<f64>,
+}
+
+impl MethodScores {
+    /// Mean MSE.
+    pub fn mse_mean(&self) -> f64 {
+        mean(&self.mse)
+    }
+    /// Mean SSIM.
+    pub fn ssim_mean(&self) -> f64 {
+        mean(&self.ssim)
+    }
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// Everything one scene, resolution and variant measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CaseResult {
+    /// Scene label.
+    pub scene: String,
+    /// The spec that was run.
+    pub spec: String,
+    /// The paper scene it corresponds to.
+    pub paper: Option<String>,
+    /// Voxel resolution (= image side).
+    pub resolution: u32,
+    /// The variant.
+    pub variant: Variant,
+    /// Triangles of the scene.
+    pub triangles: usize,
+    /// Occupied voxels.
+    pub voxels: usize,
+    /// The ground truth's own error: half the MSE of its seed-1 render against seed 0, mean
+    /// over views.
+    pub truth_error_mse: f64,
+    /// Samples per method (views × seeds).
+    pub samples: usize,
+    /// Every method's scores.
+    pub methods: Vec<MethodScores>,
+    /// Wall time of this case (its share of the shared precompute included), ms.
+    pub wall_ms: f64,
+    /// View 0 at seed 0: the ground truth, then each method.
+    #[serde(skip)]
+    pub figure: Vec<LabeledImage>,
+}
+
+impl CaseResult {
+    /// The scores of `method`.
+    pub fn method(&self, method: &str) -> Option<&MethodScores> {
+        self.methods.iter().find(|m| m.method == method)
+    }
+}
+
+/// What a paper-setup run produced.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PaperResult {
+    /// One case per scene, resolution and variant.
+    pub cases: Vec<CaseResult>,
+    /// Ground truths loaded from the cache and rendered.
+    pub truths_cached: usize,
+    /// Ground truths rendered.
+    pub truths_rendered: usize,
+    /// Wall time, ms.
+    pub wall_ms: f64,
+}
+
+/// Runs the paper setup (the variant [`Variant::paper`]) on every scene and resolution.
+pub fn run(config: &PaperConfig, progress: &(dyn Fn(&str) + Sync)) -> Result<PaperResult, Error> {
+    run_variants(config, &[Variant::paper()], progress)
+}
+
+/// Runs `variants` on every scene and resolution: the variants that share a mesh share its
+/// voxelization and precompute (per seed), and the ones that share lights and background share
+/// ground truths.
+pub fn run_variants(
+    config: &PaperConfig,
+    variants: &[Variant],
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<PaperResult, Error> {
+    config.validate()?;
+    let start = Instant::now();
+    let cache = TruthCache::new(config.cache.clone());
+    let mut result = PaperResult::default();
+    for scene in &config.scenes {
+        for &res in &config.resolutions {
+            for coarse in [false, true] {
+                let group: Vec<&Variant> = variants.iter().filter(|v| v.coarse == coarse).collect();
+                if group.is_empty() {
+                    continue;
+                }
+                let spec = match (coarse, &scene.coarse) {
+                    (false, _) => &scene.spec,
+                    (true, Some(c)) => c,
+                    (true, None) => continue,
+                };
+                let cases = run_group(config, scene, spec, res, &group, &cache, progress)?;
+                result.cases.extend(cases);
+            }
+        }
+    }
+    // Report cases in the order the variants were given.
+    result.cases.sort_by_key(|c| {
+        let v = variants.iter().position(|v| *v == c.variant).unwrap_or(usize::MAX);
+        let s = config.scenes.iter().position(|s| s.label == c.scene).unwrap_or(usize::MAX);
+        (s, c.resolution, v)
+    });
+    (result.truths_cached, result.truths_rendered) = cache.counts();
+    result.wall_ms = ms(start.elapsed());
+    Ok(result)
+}
+
+/// A representation ready to render.
+struct Built {
+    method: String,
+    repr: Repr,
+    bytes_per_voxel: f64,
+    precompute_ms: f64,
+}
+
+/// The virtual mesh is kept by type: each variant reads its subgrid with its own rule.
+enum Repr {
+    Any(Box<dyn Appearance>),
+    VirtualMesh(VirtualMeshGrid),
+}
+
+/// Precomputes every method from the sampling lines of `seed` (each timed with its own share:
+/// sampling plus fit).
+fn build(
+    ctx: &SamplingContext<'_>,
+    config: &PaperConfig,
+    seed: u32,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<Built>, Error> {
+    let opts = PrecomputeOptions { rays: config.rays, seed };
+    let per_voxel = |bytes: usize, n: usize| bytes as f64 / n.max(1) as f64;
+    let mut built = Vec::new();
+    progress("Averages");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, averages::fit)?;
+    built.push(Built {
+        method: "Averages".into(),
+        bytes_per_voxel: per_voxel(g.memory_bytes(), g.records.len()),
+        precompute_ms: ms(t.elapsed()),
+        repr: Repr::Any(Box::new(g)),
+    });
+    progress("[VJK21]");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, sggx::fit)?;
+    built.push(Built {
+        method: "[VJK21]".into(),
+        bytes_per_voxel: per_voxel(g.memory_bytes(), g.records.len()),
+        precompute_ms: ms(t.elapsed()),
+        repr: Repr::Any(Box::new(g)),
+    });
+    progress("virtual mesh");
+    let t = Instant::now();
+    let g = precompute(ctx, &opts, virtual_mesh::fit)?;
+    built.push(Built {
+        method: "virtual mesh".into(),
+        bytes_per_voxel: per_voxel(g.memory_bytes(), g.records.len()),
+        precompute_ms: ms(t.elapsed()),
+        repr: Repr::VirtualMesh(VirtualMeshGrid::new(g)),
+    });
+    if !config.thresholds.is_empty() {
+        progress("Adaptive");
+        let t = Instant::now();
+        let options = AdaptiveOptions {
+            rays: config.rays,
+            seed,
+            vmesh: virtual_mesh::VirtualMeshParams {
+                rule: Variant::paper().rule,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let candidates = adaptive::Candidates::build(ctx, &options)?;
+        let candidates_ms = ms(t.elapsed());
+        for &threshold in &config.thresholds {
+            let t = Instant::now();
+            let g = candidates.select(threshold)?;
+            built.push(Built {
+                method: format!("Adaptive τ={threshold}"),
+                bytes_per_voxel: g.memory_bytes() as f64 / g.len().max(1) as f64,
+                precompute_ms: candidates_ms + ms(t.elapsed()),
+                repr: Repr::Any(Box::new(g)),
+            });
+        }
+    }
+    Ok(built)
+}
+
+/// One scene spec at one resolution, every variant of `group` (all on the same mesh).
+fn run_group(
+    config: &PaperConfig,
+    case: &PaperScene,
+    spec: &str,
+    res: u32,
+    group: &[&Variant],
+    cache: &TruthCache,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<CaseResult>, Error> {
+    let start = Instant::now();
+    let label = &case.label;
+    progress(&format!("{label} ({spec}): loading"));
+    let base = crate::scenes::load(spec)?;
+    let geometry = base.geometry();
+    let bvh = Bvh::new(&geometry)?;
+    let (lo, hi) = base.bounds()?;
+    let views = orbit_views(base.default_camera()?, (lo + hi) * 0.5, config.views);
+
+    // Per variant: its scene (background), lights, references and crop boxes.
+    struct Setup {
+        scene: Scene,
+        lights: Vec<voxlod_scene::Light>,
+        references: Vec<Srgb8Image>,
+        crops: Vec<Crop>,
+        truth_error: f64,
+    }
+    let mut setups = Vec::new();
+    for v in group {
+        let mut scene = base.clone();
+        scene.background = v.background.colour(&base);
+        let lights = v.lighting.lights(&scene, &views[0])?;
+        let (mut references, mut crops, mut noise) = (Vec::new(), Vec::new(), 0.0);
+        for (i, camera) in views.iter().enumerate() {
+            let truth = |seed: u32| -> Result<Image, Error> {
+                progress(&format!(
+                    "{label} {res}²: ground truth ({}, {}), view {}/{}, seed {seed}",
+                    v.lighting.name(),
+                    v.background.name(),
+                    i + 1,
+                    views.len()
+                ));
+                let key = cache::TruthInputs {
+                    spec,
+                    scene: &scene,
+                    camera,
+                    lights: &lights,
+                    ambient: config.ambient,
+                    size: res,
+                    spp: config.gt_spp,
+                    seed,
+                }
+                .key();
+                cache.get_or_render(&key, || {
+                    let options = |ambient| ground_truth::Options {
+                        width: res,
+                        height: res,
+                        spp: config.gt_spp,
+                        seed,
+                        ambient,
+                        shadows: true,
+                        light_filter: None,
+                    };
+                    lighting::superpose(&lights, config.ambient, scene.background, |l, a, b| {
+                        let mut s = scene.clone();
+                        (s.lights, s.background) = (vec![*l], b);
+                        Ok(ground_truth::render(&s, &geometry, &bvh, camera, &options(a))?.image)
+                    })
+                })
+            };
+            let seed0 = truth(0)?;
+            let seed1 = truth(1)?.to_srgb8();
+            let reference = seed0.to_srgb8();
+            noise += voxlod_eval::mse(&seed1, &reference)? * 0.5;
+            crops.push(if v.crop { Crop::of_coverage(&seed0) } else { Crop::whole(&seed0) });
+            references.push(reference);
+        }
+        let truth_error = noise / views.len() as f64;
+        setups.push(Setup { scene, lights, references, crops, truth_error });
+    }
+
+    progress(&format!("{label} {res}³: voxelizing"));
+    let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), res)?;
+    let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
+    let vox = voxelize::voxelize(&geometry, &grid, &options)?;
+    let voxels = vox.voxels.len();
+    let ctx = SamplingContext::new(&base, &geometry, &vox)?;
+
+    let mut scores: Vec<Vec<MethodScores>> = vec![Vec::new(); group.len()];
+    let mut figures: Vec<Vec<LabeledImage>> = setups
+        .iter()
+        .map(|s| vec![LabeledImage::new("ground truth", s.references[0].clone())])
+        .collect();
+    for seed in 0..config.seeds {
+        let mut built = build(&ctx, config, seed, &|m| {
+            progress(&format!("{label} {res}³ seed {seed}: precompute {m}"))
+        })?;
+        for (g, (v, setup)) in group.iter().zip(&setups).enumerate() {
+            for b in &mut built {
+                progress(&format!("{label} {res}² seed {seed} {}: rendering {}", v.name, b.method));
+                let grid: &dyn Appearance = match &mut b.repr {
+                    Repr::VirtualMesh(m) => {
+                        m.rule = v.rule;
+                        m
+                    }
+                    Repr::Any(g) => &**g,
+                };
+                let (mut mse, mut ssim, mut render_ms) = (Vec::new(), Vec::new(), 0.0);
+                for ((camera, reference), crop) in
+                    views.iter().zip(&setup.references).zip(&setup.crops)
+                {
+                    let t = Instant::now();
+                    let background = setup.scene.background;
+                    let image =
+                        render(grid, camera, &setup.lights, background, config.ambient, res)?;
+                    render_ms += ms(t.elapsed());
+                    let m = voxlod_eval::compare(&crop.apply(&image), &crop.apply(reference))?;
+                    if seed == 0 && mse.is_empty() {
+                        figures[g].push(LabeledImage::new(b.method.clone(), image));
+                    }
+                    mse.push(m.mse);
+                    ssim.push(m.ssim);
+                }
+                let entry = match scores[g].iter_mut().find(|s| s.method == b.method) {
+                    Some(e) => e,
+                    None => {
+                        scores[g].push(MethodScores {
+                            method: b.method.clone(),
+                            bytes_per_voxel: b.bytes_per_voxel,
+                            precompute_ms: b.precompute_ms,
+                            render_ms: render_ms / views.len() as f64,
+                            mse: Vec::new(),
+                            ssim: Vec::new(),
+                        });
+                        scores[g].last_mut().expect("just pushed")
+                    }
+                };
+                entry.mse.extend(mse);
+                entry.ssim.extend(ssim);
+            }
+        }
+    }
+    let wall_ms = ms(start.elapsed()) / group.len() as f64;
+    Ok(group
+        .iter()
+        .zip(setups)
+        .zip(scores.into_iter().zip(figures))
+        .map(|((v, setup), (methods, figure))| CaseResult {
+            scene: case.label.clone(),
+            spec: spec.into(),
+            paper: case.paper.clone(),
+            resolution: res,
+            variant: (*v).clone(),
+            triangles: base.triangle_count(),
+            voxels,
+            truth_error_mse: setup.truth_error,
+            samples: views.len() * config.seeds as usize,
+            methods,
+            wall_ms,
+            figure,
+        })
+        .collect())
+}
+
+/// Renders `grid` from `camera` under `lights`, 8-bit sRGB.
+fn render(
+    grid: &dyn Appearance,
+    camera: &Camera,
+    lights: &[voxlod_scene::Light],
+    background: Vec3,
+    ambient: Vec3,
+    size: u32,
+) -> Result<Srgb8Image, Error> {
+    let mut cache = filtered::FrameCache::new(grid)?;
+    let image = lighting::superpose(lights, ambient, background, |l, a, b| {
+        let options = filtered::Options { width: size, height: size, ambient: a, shadows: true };
+        Ok(filtered::render(&mut cache, camera, l, b, &options)?)
+    })?;
+    Ok(image.to_srgb8())
+}
+
+/// The part of an image that is scored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    /// Left column.
+    pub x: u32,
+    /// Top row.
+    pub y: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+impl Crop {
+    /// The whole of `image`.
+    pub fn whole(image: &Image) -> Self {
+        Self { x: 0, y: 0, width: image.width, height: image.height }
+    }
+
+    /// The bounding box of the pixels of `image` with any coverage (alpha > 0), grown by one
+    /// pixel, then to at least the SSIM window per side where the image allows; the whole image
+    /// when nothing is covered.
+    pub fn of_coverage(image: &Image) -> Self {
+        let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
+        for y in 0..image.height {
+            for x in 0..image.width {
+                if image.get(x, y).w > 0.0 {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+                }
+            }
+        }
+        if x0 == u32::MAX {
+            return Self::whole(image);
+        }
+        let grow = |lo: u32, hi: u32, side: u32| -> (u32, u32) {
+            let (mut lo, mut hi) = (lo.saturating_sub(1), (hi + 1).min(side - 1));
+            let min = voxlod_eval::ssim::SSIM_WINDOW.min(side);
+            while hi - lo + 1 < min {
+                lo = lo.saturating_sub(1);
+                if hi - lo + 1 < min && hi + 1 < side {
+                    hi += 1;
+                }
+            }
+            (lo, hi - lo + 1)
+        };
+        let (x, width) = grow(x0, x1, image.width);
+        let (y, height) = grow(y0, y1, image.height);
+        Self { x, y, width, height }
+    }
+
+    /// The cropped copy of `image`.
+    pub fn apply(&self, image: &Srgb8Image) -> Srgb8Image {
+        let mut pixels = Vec::with_capacity(self.width as usize * self.height as usize);
+        for y in self.y..self.y + self.height {
+            let row = (y * image.width) as usize;
+            pixels.extend_from_slice(&image.pixels[row + self.x as usize..][..self.width as usize]);
+        }
+        Srgb8Image { width: self.width, height: self.height, pixels }
+    }
+}
+
+fn ser_debug<T: std::fmt::Debug, S: serde::Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&format!("{v:?}"))
+}
