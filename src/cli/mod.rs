@@ -248,6 +248,14 @@ pub struct CompareSceneArgs {
     pub thresholds: Vec<f32>,
     #[command(flatten)]
     pub paper: PaperArgs,
+    /// With `--setup paper`: also the rays-per-voxel sweep (`--sweep-rays`), the 2×2-downsample
+    /// experiment and the single-threaded precompute beside the paper's Table 2.
+    #[arg(long)]
+    pub extras: bool,
+    /// Rays per voxel of the `--extras` sweep, comma-separated.
+    #[arg(long, default_value = "50,150,500", value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub sweep_rays: Vec<u32>,
     /// Where to render the images that have a GPU kernel (gpu: the ground truth — every
     /// material, textures and alpha included —, the baseline, Averages and [VJK21], the virtual
     /// mesh and Adaptive). Every row says which backend rendered it. The paper setup runs on

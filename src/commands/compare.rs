@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use voxlod::studies::filtered::FilteredConfig;
+use voxlod::studies::paper::extras::{self, ExtrasConfig};
 use voxlod::studies::paper::{self, PaperConfig};
 use voxlod::studies::report::{self, Config, SceneCase};
 
@@ -95,10 +96,21 @@ fn compare_paper(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
     let progress = |msg: &str| spinner.set_message(msg.to_string());
     let result = paper::run(&config, &progress)
         .with_context(|| format!("comparing '{}' under the paper's conditions", args.scene))?;
+    let extras = if args.extras {
+        let e = ExtrasConfig { rays: args.sweep_rays.clone(), ..Default::default() };
+        Some(extras::run(&config, &e, &progress).context("measuring the paper setup's extras")?)
+    } else {
+        None
+    };
     let written = super::write_report("voxlod compare --setup paper", &args.output, |r| {
-        result.add_to_report(r, &config)
+        result.add_to_report(r, &config)?;
+        match &extras {
+            Some(e) => e.add_to_report(r, &config),
+            None => Ok(()),
+        }
     })?;
-    let json = serde_json::to_vec_pretty(&result)?;
+    let json =
+        serde_json::to_vec_pretty(&serde_json::json!({ "setup": &result, "extras": &extras }))?;
     let json_path = args.output.join("paper.json");
     voxlod::format::io::write_atomic(&json_path, |w| w.write_all(&json))
         .with_context(|| format!("writing {}", json_path.display()))?;
@@ -111,6 +123,11 @@ fn compare_paper(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
     }
     for table in result.tables()? {
         println!("\n{}", table.to_markdown());
+    }
+    if let Some(e) = &extras {
+        for table in e.tables(config.rays)? {
+            println!("\n{}", table.to_markdown());
+        }
     }
     println!("\nreport written to {} in {:.1} s", written.markdown.display(), result.wall_ms / 1e3);
     Ok(())

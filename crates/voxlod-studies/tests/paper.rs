@@ -106,3 +106,26 @@ fn bad_settings_are_refused_by_name() {
         assert!(err.contains(field), "{err}");
     }
 }
+
+#[test]
+fn the_extras_sweep_rays_downsample_and_time_the_precompute() {
+    use voxlod_studies::paper::extras::{self, ExtrasConfig};
+    let config = PaperConfig { resolutions: vec![16], seeds: 1, ..PaperConfig::smoke() };
+    let e = ExtrasConfig { rays: vec![8, 32], downsample: true, precompute: true };
+    let result = extras::run(&config, &e, &|_| {}).unwrap();
+    // Three methods (no Adaptive in the sweep) at two ray counts.
+    assert_eq!(result.rays.len(), 6);
+    assert!(result.rays.iter().all(|r| r.mse.len() == 2 && r.mse[0] > 0.0));
+    // More rays change the virtual mesh's images (its fit sees other lines).
+    let vm =
+        |rays| result.rays.iter().find(|r| r.rays == rays && r.what == "virtual mesh").unwrap();
+    assert_ne!(vm(8).mse, vm(32).mse);
+    // The downsample experiment: three rows, the fine [VJK21] scored at the coarse side.
+    assert_eq!(result.downsample.len(), 3);
+    assert!(result.downsample[1].what.contains("32³ at 32²"));
+    assert_ne!(result.downsample[0].mse, result.downsample[1].mse);
+    let p = &result.precompute[0];
+    assert!(p.voxels > 0 && p.precompute_s > 0.0 && p.memory_mb > 0.0);
+    assert_eq!(p.paper_table_2, None, "16³ has no Table 2 row");
+    assert_eq!(result.tables(32).unwrap().len(), 3);
+}

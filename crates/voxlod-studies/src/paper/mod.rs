@@ -28,7 +28,9 @@
 
 pub mod ablation;
 pub mod cache;
+pub mod extras;
 pub mod lighting;
+mod setup;
 pub mod stats;
 mod tables;
 
@@ -42,21 +44,19 @@ use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
 use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
 use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
-use voxlod_cpu::raycast::Bvh;
-use voxlod_cpu::render::{filtered, ground_truth};
 use voxlod_cpu::voxelize::{self, Mode};
 use voxlod_eval::report::LabeledImage;
 use voxlod_format::GridSpec;
-use voxlod_scene::{Camera, Image, Scene, Srgb8Image};
 
 pub use cache::TruthCache;
 pub use lighting::{Background, Lighting};
+pub use setup::Crop;
+use setup::{Loaded, render};
 pub use stats::PairedDiff;
 pub use tables::{PAPER_TABLE_1, findings};
 
 use crate::Error;
 use crate::spread::ms;
-use crate::views::orbit_views;
 
 /// A scene of the paper setup: its dense spec (the setup's) and a coarse one (the mesh-density
 /// deviation), and the paper scene it stands for, if any.
@@ -480,80 +480,21 @@ fn run_group(
     let start = Instant::now();
     let label = &case.label;
     progress(&format!("{label} ({spec}): loading"));
-    let base = crate::scenes::load(spec)?;
-    let geometry = base.geometry();
-    let bvh = Bvh::new(&geometry)?;
+    let loaded = Loaded::new(spec, config.views)?;
+    let (base, geometry) = (&loaded.scene, &loaded.geometry);
     let (lo, hi) = base.bounds()?;
-    let views = orbit_views(base.default_camera()?, (lo + hi) * 0.5, config.views);
-
-    // Per variant: its scene (background), lights, references and crop boxes.
-    struct Setup {
-        scene: Scene,
-        lights: Vec<voxlod_scene::Light>,
-        references: Vec<Srgb8Image>,
-        crops: Vec<Crop>,
-        truth_error: f64,
-    }
+    let views = &loaded.views;
     let mut setups = Vec::new();
     for v in group {
-        let mut scene = base.clone();
-        scene.background = v.background.colour(&base);
-        let lights = v.lighting.lights(&scene, &views[0])?;
-        let (mut references, mut crops, mut noise) = (Vec::new(), Vec::new(), 0.0);
-        for (i, camera) in views.iter().enumerate() {
-            let truth = |seed: u32| -> Result<Image, Error> {
-                progress(&format!(
-                    "{label} {res}²: ground truth ({}, {}), view {}/{}, seed {seed}",
-                    v.lighting.name(),
-                    v.background.name(),
-                    i + 1,
-                    views.len()
-                ));
-                let key = cache::TruthInputs {
-                    spec,
-                    scene: &scene,
-                    camera,
-                    lights: &lights,
-                    ambient: config.ambient,
-                    size: res,
-                    spp: config.gt_spp,
-                    seed,
-                }
-                .key();
-                cache.get_or_render(&key, || {
-                    let options = |ambient| ground_truth::Options {
-                        width: res,
-                        height: res,
-                        spp: config.gt_spp,
-                        seed,
-                        ambient,
-                        shadows: true,
-                        light_filter: None,
-                    };
-                    lighting::superpose(&lights, config.ambient, scene.background, |l, a, b| {
-                        let mut s = scene.clone();
-                        (s.lights, s.background) = (vec![*l], b);
-                        Ok(ground_truth::render(&s, &geometry, &bvh, camera, &options(a))?.image)
-                    })
-                })
-            };
-            let seed0 = truth(0)?;
-            let seed1 = truth(1)?.to_srgb8();
-            let reference = seed0.to_srgb8();
-            noise += voxlod_eval::mse(&seed1, &reference)? * 0.5;
-            crops.push(if v.crop { Crop::of_coverage(&seed0) } else { Crop::whole(&seed0) });
-            references.push(reference);
-        }
-        let truth_error = noise / views.len() as f64;
-        setups.push(Setup { scene, lights, references, crops, truth_error });
+        setups.push(loaded.truths(v, res, config, cache, &|m| progress(&format!("{label} {m}")))?);
     }
 
     progress(&format!("{label} {res}³: voxelizing"));
     let grid = GridSpec::fit(lo.as_dvec3(), hi.as_dvec3(), res)?;
     let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
-    let vox = voxelize::voxelize(&geometry, &grid, &options)?;
+    let vox = voxelize::voxelize(geometry, &grid, &options)?;
     let voxels = vox.voxels.len();
-    let ctx = SamplingContext::new(&base, &geometry, &vox)?;
+    let ctx = SamplingContext::new(base, geometry, &vox)?;
 
     let mut scores: Vec<Vec<MethodScores>> = vec![Vec::new(); group.len()];
     let mut figures: Vec<Vec<LabeledImage>> = setups
@@ -629,84 +570,6 @@ fn run_group(
             figure,
         })
         .collect())
-}
-
-/// Renders `grid` from `camera` under `lights`, 8-bit sRGB.
-fn render(
-    grid: &dyn Appearance,
-    camera: &Camera,
-    lights: &[voxlod_scene::Light],
-    background: Vec3,
-    ambient: Vec3,
-    size: u32,
-) -> Result<Srgb8Image, Error> {
-    let mut cache = filtered::FrameCache::new(grid)?;
-    let image = lighting::superpose(lights, ambient, background, |l, a, b| {
-        let options = filtered::Options { width: size, height: size, ambient: a, shadows: true };
-        Ok(filtered::render(&mut cache, camera, l, b, &options)?)
-    })?;
-    Ok(image.to_srgb8())
-}
-
-/// The part of an image that is scored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Crop {
-    /// Left column.
-    pub x: u32,
-    /// Top row.
-    pub y: u32,
-    /// Width.
-    pub width: u32,
-    /// Height.
-    pub height: u32,
-}
-
-impl Crop {
-    /// The whole of `image`.
-    pub fn whole(image: &Image) -> Self {
-        Self { x: 0, y: 0, width: image.width, height: image.height }
-    }
-
-    /// The bounding box of the pixels of `image` with any coverage (alpha > 0), grown by one
-    /// pixel, then to at least the SSIM window per side where the image allows; the whole image
-    /// when nothing is covered.
-    pub fn of_coverage(image: &Image) -> Self {
-        let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
-        for y in 0..image.height {
-            for x in 0..image.width {
-                if image.get(x, y).w > 0.0 {
-                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
-                }
-            }
-        }
-        if x0 == u32::MAX {
-            return Self::whole(image);
-        }
-        let grow = |lo: u32, hi: u32, side: u32| -> (u32, u32) {
-            let (mut lo, mut hi) = (lo.saturating_sub(1), (hi + 1).min(side - 1));
-            let min = voxlod_eval::ssim::SSIM_WINDOW.min(side);
-            while hi - lo + 1 < min {
-                lo = lo.saturating_sub(1);
-                if hi - lo + 1 < min && hi + 1 < side {
-                    hi += 1;
-                }
-            }
-            (lo, hi - lo + 1)
-        };
-        let (x, width) = grow(x0, x1, image.width);
-        let (y, height) = grow(y0, y1, image.height);
-        Self { x, y, width, height }
-    }
-
-    /// The cropped copy of `image`.
-    pub fn apply(&self, image: &Srgb8Image) -> Srgb8Image {
-        let mut pixels = Vec::with_capacity(self.width as usize * self.height as usize);
-        for y in self.y..self.y + self.height {
-            let row = (y * image.width) as usize;
-            pixels.extend_from_slice(&image.pixels[row + self.x as usize..][..self.width as usize]);
-        }
-        Srgb8Image { width: self.width, height: self.height, pixels }
-    }
 }
 
 fn ser_debug<T: std::fmt::Debug, S: serde::Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
