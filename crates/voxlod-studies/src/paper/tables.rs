@@ -138,6 +138,57 @@ impl CaseResult {
         Ok(table)
     }
 
+    /// Each Adaptive method against the target: SSIM at least the best single representation's
+    /// minus the interval (the paired difference's interval reaches zero or above) at no more
+    /// than 25 % of the virtual mesh's bytes per voxel. None when the case has no Adaptive
+    /// method.
+    pub fn adaptive_table(&self) -> Result<Option<Table>, Error> {
+        let singles = ["Averages", "[VJK21]", "virtual mesh"];
+        let best = self
+            .methods
+            .iter()
+            .filter(|m| singles.contains(&m.method.as_str()))
+            .max_by(|a, b| a.ssim_mean().total_cmp(&b.ssim_mean()));
+        let (Some(best), Some(vm)) = (best, self.method("virtual mesh")) else { return Ok(None) };
+        let adaptive: Vec<&MethodScores> =
+            self.methods.iter().filter(|m| m.method.starts_with("Adaptive")).collect();
+        if adaptive.is_empty() {
+            return Ok(None);
+        }
+        let mut table = Table::new(
+            format!(
+                "{} {}³ ({}): Adaptive against its target (SSIM ≥ the best single representation's, {}, within the interval, at ≤ 25 % of the virtual mesh's {:.1} B/voxel)",
+                self.scene, self.resolution, self.variant.name, best.method, vm.bytes_per_voxel
+            ),
+            vec![
+                Column::text("method"),
+                Column::number("B/voxel", NumberFormat::Fixed(1)),
+                Column::text("of virtual mesh"),
+                Column::text(format!("ΔSSIM vs {} [95 %]", best.method)),
+                Column::text("target"),
+            ],
+        );
+        for a in adaptive {
+            let d = PairedDiff::of(&a.ssim, &best.ssim);
+            let ratio = a.bytes_per_voxel / vm.bytes_per_voxel;
+            let quality = d.hi >= 0.0;
+            let verdict = match (quality, ratio <= 0.25) {
+                (true, true) => "met".to_string(),
+                (false, true) => format!("missed: SSIM {:.4} below", -d.hi),
+                (true, false) => "missed: bytes".to_string(),
+                (false, false) => "missed: SSIM and bytes".to_string(),
+            };
+            table.push_row(vec![
+                a.method.clone().into(),
+                Cell::Number(a.bytes_per_voxel),
+                Cell::Text(format!("{:.1} %", ratio * 100.0)),
+                Cell::Text(d.display_fixed(4)),
+                Cell::Text(verdict),
+            ])?;
+        }
+        Ok(Some(table))
+    }
+
     /// The best method by mean SSIM, and whether its lead over the runner-up is resolved.
     pub fn best_by_ssim(&self) -> Option<(&MethodScores, bool)> {
         let mut sorted: Vec<&MethodScores> = self.methods.iter().collect();
@@ -238,6 +289,7 @@ impl super::PaperResult {
         for c in &self.cases {
             tables.push(c.scores_table()?);
             tables.push(c.pairs_table()?);
+            tables.extend(c.adaptive_table()?);
         }
         Ok(tables)
     }
@@ -264,6 +316,9 @@ impl super::PaperResult {
             ));
             report.table(c.scores_table()?);
             report.table(c.pairs_table()?);
+            if let Some(t) = c.adaptive_table()? {
+                report.table(t);
+            }
             if !c.figure.is_empty() {
                 let name = format!("paper-{}-{}-{}", c.scene, c.resolution, slug(&c.variant.name));
                 let caption = format!(
