@@ -105,6 +105,7 @@ mod error;
 pub mod grid;
 pub mod io;
 pub mod morton;
+pub mod nvdb;
 pub mod records;
 pub mod vol;
 pub mod vox;
