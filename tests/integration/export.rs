@@ -220,6 +220,35 @@ fn a_volume_density_exports_to_vol_and_nvdb_and_not_to_vox() {
             .all(|&(c, d)| d > 0.0 && d.is_finite() && c.cmplt(IVec3::splat(32)).all())
     );
 
+    // Each density is the particles' at the voxel's world centre (the grid's map): the sum of
+    // the densities of the particles whose displaced surface holds that point, evaluated here
+    // in world space (the export evaluates it in the volume's frame, so a few voxels on a
+    // surface may round the other way).
+    let system = voxlod::studies::volume::preset("smoke", 0).unwrap();
+    let spheres = system.at(system.time);
+    let mut differ = Vec::new();
+    for &(c, d) in &density.voxels {
+        let p = density.map.apply(c.as_dvec3()).as_vec3();
+        let expected: f32 = spheres
+            .iter()
+            .filter(|s| {
+                let offset = p - s.center;
+                let r = s.surface_radius(s.displacement(&system.displacement, offset));
+                offset.length_squared() <= r * r
+            })
+            .map(|s| s.density)
+            .sum();
+        if (d - expected).abs() > 1e-4 * expected.max(d) {
+            differ.push((c, d, expected));
+        }
+    }
+    assert!(
+        differ.len() * 200 < voxels,
+        "{} of {voxels} densities differ from the particles': {:?}",
+        differ.len(),
+        &differ[..differ.len().min(5)]
+    );
+
     let vol_path = dir.join("smoke.vol");
     let summary = json(&voxlod(&[&args[..], &["-o", s(&vol_path)]].concat()));
     assert_eq!(summary["files"].as_array().unwrap().len(), 1, "a volume has no albedo file");
