@@ -200,14 +200,14 @@ fn decode_typed<T: NvdbValue>(g: &[u8], base: usize, path: &Path) -> Result<Nvdb
 
     // Tree and root.
     let tree = GRID_BYTES;
-    let root_at = tree as u64 + u64_at(g, tree + 24);
-    let node_at = |level: usize| tree as u64 + u64_at(g, tree + 16 - 8 * level);
+    let root_at = (tree as u64).saturating_add(u64_at(g, tree + 24));
+    let node_at = |level: usize| (tree as u64).saturating_add(u64_at(g, tree + 16 - 8 * level));
     let counts = [
         u32_at(g, tree + 40) as usize,
         u32_at(g, tree + 36) as usize,
         u32_at(g, tree + 32) as usize,
     ];
-    if !root_at.is_multiple_of(32) || root_at + sz.root as u64 > g.len() as u64 {
+    if !root_at.is_multiple_of(32) || root_at.saturating_add(sz.root as u64) > g.len() as u64 {
         return Err(bad(tree + 24, format!("root offset {root_at} out of the grid or misaligned")));
     }
     let root_at = root_at as usize;
@@ -250,22 +250,28 @@ fn decode_typed<T: NvdbValue>(g: &[u8], base: usize, path: &Path) -> Result<Nvdb
         }
     }
 
-    // The walk. Children must lie after their parent, inside their level's block: no cycles,
-    // no reads out of bounds.
+    // The walk. Children must lie after their parent, inside their level's block, each reached
+    // once: no cycles, no reads out of bounds, at most 512 voxels per leaf of the file.
     let background = T::get(&g[root_at + 28..]);
     let mut voxels = Vec::new();
-    let child_of = |parent: usize, offset: i64, level: usize| -> Result<usize> {
+    let mut reached = levels.map(|(_, _, n)| vec![false; n]);
+    let mut child_of = |parent: usize, offset: i64, level: usize| -> Result<usize> {
         let (first, size, n) = levels[level];
-        let at = parent as i64 + offset;
-        if offset <= 0
-            || at < first as i64
-            || at >= (first + size * n) as i64
-            || !(at as usize - first).is_multiple_of(size)
-        {
+        let at = (parent as i64).checked_add(offset).filter(|&at| {
+            offset > 0
+                && at >= first as i64
+                && at < (first + size * n) as i64
+                && (at as usize - first).is_multiple_of(size)
+        });
+        let Some(at) = at else {
             return Err(bad(
                 parent,
                 format!("child offset {offset} does not point at a node of level {level}"),
             ));
+        };
+        let index = (at as usize - first) / size;
+        if std::mem::replace(&mut reached[level][index], true) {
+            return Err(bad(parent, format!("node {index} of level {level} has two parents")));
         }
         Ok(at as usize)
     };
