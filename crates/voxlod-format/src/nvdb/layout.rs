@@ -317,11 +317,10 @@ pub(super) fn build<T: NvdbValue>(grid: &NvdbGrid<T>) -> Result<Built> {
     for corner in 0..8 {
         let pick =
             |bit: i32, a: i32, z: i32| if corner & bit == 0 { a as f64 } else { z as f64 + 1.0 };
-        let p = grid.map.apply(DVec3::new(
-            pick(1, lo.x, hi.x),
-            pick(2, lo.y, hi.y),
-            pick(4, lo.z, hi.z),
-        ));
+        let p = apply_fma(
+            &grid.map,
+            DVec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z)),
+        );
         world = [world[0].min(p), world[1].max(p)];
     }
     for (i, x) in world[0].to_array().into_iter().chain(world[1].to_array()).enumerate() {
@@ -445,6 +444,16 @@ pub(super) fn build<T: NvdbValue>(grid: &NvdbGrid<T>) -> Result<Built> {
         voxel_size,
         nodes,
     })
+}
+
+/// `map` applied as NanoVDB's `Map::applyMap` does it (fused multiply-adds, row by row), so the
+/// world bbox rounds as NanoVDB's own `GridStats` rounds it.
+fn apply_fma(map: &super::IndexToWorld, ijk: DVec3) -> DVec3 {
+    let (m, t) = (map.matrix, map.translation);
+    DVec3::from_array(std::array::from_fn(|r| {
+        let row = m.row(r);
+        ijk.x.mul_add(row.x, ijk.y.mul_add(row.y, ijk.z.mul_add(row.z, t[r])))
+    }))
 }
 
 /// The root key of the upper node at `origin`: 21 bits per axis of `coordinate >> 12`, x

@@ -238,11 +238,15 @@ fn reference_grids(path: Option<&Path>) -> Vec<GridSummary> {
         ],
     };
     let mut out = Vec::new();
-    for (name, g) in [("ref_one.nvdb", AnyGrid::from(one)), ("ref_vec3.nvdb", color.into())] {
+    let (one, color) = (AnyGrid::from(one), AnyGrid::from(color));
+    for (name, g) in [("ref_one.nvdb", one.clone()), ("ref_vec3.nvdb", color.clone())] {
         match path {
             Some(dir) => out.extend(write(dir.join(name), &[g]).unwrap()),
             None => out.extend(encode(&[g]).unwrap().1),
         }
+    }
+    if let Some(dir) = path {
+        write(dir.join("ref_both.nvdb"), &[one, color]).unwrap();
     }
     out
 }
@@ -251,7 +255,8 @@ fn reference_grids(path: Option<&Path>) -> Vec<GridSummary> {
 fn the_checksums_match_the_ones_nanovdb_computes() {
     // The same grids built by NanoVDB 32.4's GridBuilder (OpenVDB 10.0.1's headers: background
     // 0, the same class, voxel size and translation, ChecksumMode::Full) have these checksums
-    // and sizes.
+    // and sizes. With VOXLOD_NVDB_REFERENCE_DIR set, the files are written there (each grid
+    // alone, and both in one file) to compare with NanoVDB's io::writeGrid(s) byte for byte.
     let s =
         reference_grids(std::env::var_os("VOXLOD_NVDB_REFERENCE_DIR").as_deref().map(Path::new));
     assert_eq!(
