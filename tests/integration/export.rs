@@ -259,10 +259,13 @@ fn a_volume_density_exports_to_vol_and_nvdb_and_not_to_vox() {
     }
     nanovdb_validate(&nvdb_path, 1);
 
-    for (input, output, needle) in
-        [("volume:smoke", "smoke.vox", ".nvdb"), ("volume:fog", "fog.nvdb", "fog")]
-    {
-        let out = voxlod(&["export", input, "--res", "32", "-o", s(&dir.join(output))]);
+    for (input, res, output, needle) in [
+        ("volume:smoke", "32", "smoke.vox", ".nvdb"),
+        ("volume:fog", "32", "fog.nvdb", "fog"),
+        ("volume:smoke", "129", "odd.nvdb", "129 metavoxels"),
+        ("volume:smoke", "8192", "huge.vol", "at most 4096"),
+    ] {
+        let out = voxlod(&["export", input, "--res", res, "-o", s(&dir.join(output))]);
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{err}");
