@@ -29,8 +29,8 @@ pub enum Command {
     Report(ReportArgs),
     /// Voxelize a scene into a .vxl or .binvox file.
     Voxelize(VoxelizeArgs),
-    /// Export a scene (voxelized and filtered with the Averages fit) or a .vxl file to
-    /// MagicaVoxel .vox or Mitsuba 3 .vol.
+    /// Export a scene (voxelized and filtered with the Averages fit), a .vxl file or a
+    /// procedural volume's density to MagicaVoxel .vox, Mitsuba 3 .vol or NanoVDB .nvdb.
     Export(ExportArgs),
     /// Render the ground truth of a scene (mesh ray casting) to a PNG.
     Render(RenderArgs),
@@ -142,13 +142,17 @@ pub struct VoxelizeArgs {
 #[derive(Debug, Args)]
 pub struct ExportArgs {
     /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`, voxelized and
-    /// filtered on the way; or a .vxl file of Averages or occupancy records.
+    /// filtered on the way; a .vxl file of Averages or occupancy records; or `volume:PRESET`
+    /// (smoke, explosion, clouds), the density of a procedural volume's particles sampled on
+    /// a world-aligned cube of --res³ voxels (.vol and .nvdb only).
     pub input: String,
-    /// Output file: .vox (MagicaVoxel: occupancy and a 255-colour palette) or .vol (Mitsuba 3:
-    /// density, with the albedo beside it as NAME.albedo.vol).
+    /// Output file: .vox (MagicaVoxel: occupancy and a 255-colour palette), .vol (Mitsuba 3:
+    /// density, with the albedo beside it as NAME.albedo.vol) or .nvdb (NanoVDB: a `density`
+    /// float fog volume and a `color` Vec3f grid in one file).
     #[arg(short, long, value_parser = parse::export_output)]
     pub output: ExportOutput,
-    /// Voxels along the longest axis of the scene's bounds (scene inputs).
+    /// Voxels along the longest axis of the scene's bounds (scene inputs), or along each axis
+    /// of the volume's cube (volume inputs, at most 4096).
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=2_097_152))]
     pub res: u32,
     /// Sampling lines per voxel of the Averages fit (scene inputs).
@@ -175,6 +179,8 @@ pub enum ExportFormat {
     Vox,
     /// Mitsuba 3 `.vol`.
     Vol,
+    /// NanoVDB `.nvdb`.
+    Nvdb,
 }
 
 /// `voxlod render`.

@@ -60,14 +60,19 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// An export's output path, its format named by its extension (`.vox` or `.vol`).
+/// An export's output path, its format named by its extension (`.vox`, `.vol` or `.nvdb`).
 pub fn export_output(s: &str) -> Result<super::ExportOutput, String> {
     let path = std::path::PathBuf::from(s);
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let format = match ext.as_deref() {
         Some("vox") => super::ExportFormat::Vox,
         Some("vol") => super::ExportFormat::Vol,
-        _ => return Err(format!("'{s}' must end in .vox (MagicaVoxel) or .vol (Mitsuba 3)")),
+        Some("nvdb") => super::ExportFormat::Nvdb,
+        _ => {
+            return Err(format!(
+                "'{s}' must end in .vox (MagicaVoxel), .vol (Mitsuba 3) or .nvdb (NanoVDB)"
+            ));
+        }
     };
     Ok(super::ExportOutput { path, format })
 }

@@ -3,7 +3,8 @@
 //! ([`BrickMap`]), the frozen per-voxel appearance records of the filtered representations
 //! ([`records`]), and files: voxlod's own `.vxl` container ([`vxl`]: versioned, checksummed,
 //! typed records), and for the tools people already have binvox ([`binvox`]), MagicaVoxel
-//! `.vox` ([`vox`]) and Mitsuba 3's grid volumes ([`vol`]).
+//! `.vox` ([`vox`]), Mitsuba 3's grid volumes ([`vol`]) and NanoVDB's sparse grids
+//! ([`nvdb`]).
 //!
 //! This crate is the bottom of the voxlod stack: every other voxlod crate speaks its types, and
 //! it depends on no other voxlod crate and on no GPU API. Every type a GPU reads
@@ -53,6 +54,7 @@
 //! | [`binvox`] | occupancy export (padded to a cube, world positions kept) and strict import of versions 1 and 2 |
 //! | [`vox`] | MagicaVoxel export (occupancy, a 255-colour palette by median cut + k-means with its measured error, 256³ models placed by the scene graph) and import |
 //! | [`vol`] | Mitsuba 3 `.vol` grid volumes (dense `float32`, 1/3/6 channels): density (extinction) and albedo of an Averages grid; read and write |
+//! | [`nvdb`] | NanoVDB `.nvdb` (NanoVDB 32.4's flat layout): sparse `float` and `Vec3f` grids with node statistics, index-to-world map (index = voxel centre) and full checksum; density (extinction) and colour of an Averages grid; read and write |
 //! | [`records`] | the Averages, SGGX, virtual-mesh and specular records and the adaptive grid's reference, with their quantizers ([`records::quant`]) |
 //! | [`io`] | [`io::write_atomic`]: a temporary file renamed over the target, so a failure never leaves half a file |
 //!
@@ -80,6 +82,9 @@
 //! - Files are read whole into memory; there is no streaming or memory-mapped access.
 //! - binvox carries occupancy only; records need `.vxl`. `.vox` keeps occupancy and quantized
 //!   colours but not the grid's origin and voxel size; `.vol` is dense.
+//! - No OpenVDB `.vdb`: [`nvdb`] writes NanoVDB, which OpenVDB's `nanovdb_convert` turns into
+//!   `.vdb`; `.nvdb` files are uncompressed, and only `float` and `Vec3f` grids with every
+//!   active value in a leaf are read.
 //! - A [`BrickMap`] is built once from its voxels: values can change in place, but voxels cannot
 //!   be added or removed without rebuilding it.
 //!
@@ -96,6 +101,9 @@
 //!   (`github.com/ephtracy/voxel-model`); Heckbert 1982, "Color image quantization for frame
 //!   buffer display", SIGGRAPH (median cut): [`vox`].
 //! - Mitsuba 3 documentation, `gridvolume` plugin (the `.vol` layout): [`vol`].
+//! - Museth 2021, "NanoVDB: A GPU-Friendly and Portable VDB Data Structure For Real-Time
+//!   Rendering And Simulation", SIGGRAPH Talks, and OpenVDB 10.0's NanoVDB headers (the
+//!   layout, file codec and checksum): [`nvdb`].
 
 #![deny(missing_docs)]
 
@@ -105,6 +113,7 @@ mod error;
 pub mod grid;
 pub mod io;
 pub mod morton;
+pub mod nvdb;
 pub mod records;
 pub mod vol;
 pub mod vox;
