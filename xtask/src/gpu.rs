@@ -1,11 +1,12 @@
-//! Finding a GPU adapter, and installing Mesa's lavapipe (a Vulkan driver that runs on the
-//! CPU) when there is none and the system has apt.
+//! Finding a GPU adapter, and installing the system packages the tests need when the system has
+//! apt: Mesa's lavapipe (a Vulkan driver that runs on the CPU) when there is no adapter, and
+//! NanoVDB's command-line tools, which check the `.nvdb` files voxlod writes.
 //!
-//! The install is one apt transaction, printed before it runs: `apt-get update` only when the
-//! package lists do not know `mesa-vulkan-drivers`, then a non-interactive
-//! `apt-get install -y mesa-vulkan-drivers`; prefixed with `sudo -n` when not root. Every
-//! reason it cannot run (no apt, not root and no password-less sudo) is found before apt
-//! starts, so the run fails within seconds and names the command to run by hand.
+//! An install is one apt transaction, printed before it runs: `apt-get update` only when the
+//! package lists do not know the package, then a non-interactive `apt-get install -y PACKAGE`;
+//! prefixed with `sudo -n` when not root. Every reason it cannot run (no apt, not root and no
+//! password-less sudo) is found before apt starts, so the run fails within seconds and names
+//! the command to run by hand.
 
 use std::ffi::OsStr;
 use std::fmt;
@@ -14,8 +15,39 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result};
 
-/// The Debian/Ubuntu package that holds lavapipe.
-pub const PACKAGE: &str = "mesa-vulkan-drivers";
+/// A Debian/Ubuntu package the tests need, and why.
+#[derive(Clone, Copy, Debug)]
+pub struct Package {
+    /// The package name.
+    pub name: &'static str,
+    /// What it is, for messages ("Mesa's lavapipe").
+    pub what: &'static str,
+    /// Why it is installed, the start of a message ("no GPU adapter").
+    pub why: &'static str,
+    /// How to install it elsewhere (several lines when apt is absent).
+    pub no_apt: &'static str,
+}
+
+/// The package that holds lavapipe.
+pub const LAVAPIPE: Package = Package {
+    name: "mesa-vulkan-drivers",
+    what: "Mesa's lavapipe",
+    why: "no GPU adapter",
+    no_apt: NO_APT_BY_HAND,
+};
+
+/// The package that holds `nanovdb_validate` (OpenVDB 10's NanoVDB tools).
+pub const NANOVDB_TOOLS: Package = Package {
+    name: "libnanovdb-tools",
+    what: "NanoVDB's tools (nanovdb_validate)",
+    why: "no nanovdb_validate on PATH",
+    no_apt: "install OpenVDB 10's NanoVDB tools (nanovdb_validate) from your distribution",
+};
+
+/// Whether `name` is an executable on PATH.
+pub fn have(name: &str) -> bool {
+    on_path(name).is_some()
+}
 
 /// What the adapters example reported.
 pub enum Adapters {
@@ -83,10 +115,12 @@ impl fmt::Display for CommandLine {
     }
 }
 
-/// Why lavapipe was not installed; `Display` says what to do by hand.
+/// Why a package was not installed; `Display` says what to do by hand.
 pub struct NotInstalled {
     /// The reason, one sentence.
     pub reason: String,
+    /// What the package is.
+    pub what: &'static str,
     /// The command a user runs to install it (several lines when the OS is unknown).
     pub by_hand: String,
 }
@@ -95,16 +129,16 @@ impl fmt::Display for NotInstalled {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{}\n==> to install Mesa's lavapipe by hand, run:\n      {}",
-            self.reason, self.by_hand
+            "{}\n==> to install {} by hand, run:\n      {}",
+            self.reason, self.what, self.by_hand
         )
     }
 }
 
 /// The install command a user types in a shell (sudo may ask for a password there).
-fn by_hand(sudo: bool, update: bool) -> String {
+fn by_hand(package: &Package, sudo: bool, update: bool) -> String {
     let s = if sudo { "sudo " } else { "" };
-    let install = format!("{s}apt-get install -y {PACKAGE}");
+    let install = format!("{s}apt-get install -y {}", package.name);
     if update { format!("{s}apt-get update && {install}") } else { install }
 }
 
@@ -113,21 +147,24 @@ const NO_APT_BY_HAND: &str = "Debian/Ubuntu: sudo apt-get install -y mesa-vulkan
       Arch:          sudo pacman -S vulkan-swrast
       (or any Vulkan, Metal or DX12 driver for your GPU)";
 
-/// Installs lavapipe with apt, or says (within seconds, before apt runs) why it cannot.
+/// Installs `package` with apt, or says (within seconds, before apt runs) why it cannot.
 /// `decline` (`--no-install`) only reports the command.
-pub fn install_lavapipe(decline: bool) -> Result<std::result::Result<(), NotInstalled>> {
+pub fn install(package: &Package, decline: bool) -> Result<std::result::Result<(), NotInstalled>> {
+    let (why, what) = (package.why, package.what);
     if on_path("apt-get").is_none() {
         return Ok(Err(NotInstalled {
-            reason: "no GPU adapter, and no apt-get on PATH to install Mesa's lavapipe".into(),
-            by_hand: NO_APT_BY_HAND.into(),
+            reason: format!("{why}, and no apt-get on PATH to install {what}"),
+            what,
+            by_hand: package.no_apt.into(),
         }));
     }
     let root = is_root();
-    let update = !apt_knows(PACKAGE);
-    let hand = by_hand(!root, update);
+    let update = !apt_knows(package.name);
+    let hand = by_hand(package, !root, update);
     if decline {
         return Ok(Err(NotInstalled {
-            reason: "no GPU adapter, and --no-install declines installing Mesa's lavapipe".into(),
+            reason: format!("{why}, and --no-install declines installing {what}"),
+            what,
             by_hand: hand,
         }));
     }
@@ -135,10 +172,11 @@ pub fn install_lavapipe(decline: bool) -> Result<std::result::Result<(), NotInst
     if !root {
         let Some(sudo) = on_path("sudo") else {
             return Ok(Err(NotInstalled {
-                reason: "no GPU adapter; installing Mesa's lavapipe needs root, and there is no \
-                         sudo on PATH"
-                    .into(),
-                by_hand: by_hand(false, update) + "   (as root)",
+                reason: format!(
+                    "{why}; installing {what} needs root, and there is no sudo on PATH"
+                ),
+                what,
+                by_hand: by_hand(package, false, update) + "   (as root)",
             }));
         };
         let ok = Command::new(&sudo)
@@ -150,9 +188,11 @@ pub fn install_lavapipe(decline: bool) -> Result<std::result::Result<(), NotInst
             .is_ok_and(|s| s.success());
         if !ok {
             return Ok(Err(NotInstalled {
-                reason: "no GPU adapter; installing Mesa's lavapipe needs root, and sudo wants a \
-                         password (`sudo -n true` failed)"
-                    .into(),
+                reason: format!(
+                    "{why}; installing {what} needs root, and sudo wants a password \
+                     (`sudo -n true` failed)"
+                ),
+                what,
                 by_hand: hand,
             }));
         }
@@ -173,14 +213,15 @@ pub fn install_lavapipe(decline: bool) -> Result<std::result::Result<(), NotInst
         install.argv.extend(prefix.iter().cloned());
         install.argv.extend(["env".into(), "DEBIAN_FRONTEND=noninteractive".into()]);
     }
-    install.argv.extend([apt, "install".into(), "-y".into(), PACKAGE.into()]);
+    install.argv.extend([apt, "install".into(), "-y".into(), package.name.into()]);
     commands.push(install);
 
-    println!("==> no GPU adapter: installing Mesa's lavapipe (Vulkan on the CPU) with apt");
+    println!("==> {why}: installing {what} with apt");
     for c in &commands {
         if !c.run()? {
             return Ok(Err(NotInstalled {
-                reason: format!("installing Mesa's lavapipe failed: `{c}` did not succeed"),
+                reason: format!("installing {what} failed: `{c}` did not succeed"),
+                what,
                 by_hand: hand,
             }));
         }
