@@ -6,6 +6,10 @@
 //! decimal, numbers anything Rust's `f32` parser accepts, booleans `true`/`false`/`1`/`0`.
 //! Unknown scenes, unknown or repeated keys, malformed pairs and out-of-range values are all an
 //! [`Error::InvalidParameter`] that names the scene and key and says what is valid.
+//!
+//! Every builtin also takes `subdivide=N` and `subdivision=midpoint|loop`
+//! ([`crate::subdivide::PARAMS`]): the scene is built, then each of its meshes subdivided `N`
+//! times (`4^N` as many triangles), e.g. `sphere?subdiv=2&subdivide=2&subdivision=loop`.
 
 use std::sync::LazyLock;
 
@@ -17,6 +21,7 @@ use super::{
     BlindsParams, BumpyParams, CrowdParams, ForestParams, IslandParams, blinds, bumpy, crowd,
     forest, island,
 };
+use crate::subdivide::{PARAMS as SUBDIVISION_PARAMS, Subdivision};
 use crate::{Error, Material, Result, Scene};
 
 /// One parameter of a builtin scene.
@@ -206,12 +211,16 @@ pub fn builtin_params(name: &str) -> Result<&'static [ParamInfo]> {
     Ok(find(name)?.params)
 }
 
-/// Builds builtin `name` with `params` as `(key, value)` pairs (see the module docs).
+/// Builds builtin `name` with `params` as `(key, value)` pairs (see the module docs), then
+/// subdivides it if the pairs include `subdivide` ([`crate::subdivide::Subdivision`]).
 pub fn builtin(name: &str, params: &[(&str, &str)]) -> Result<Scene> {
     let b = find(name)?;
+    let mut params = params.to_vec();
+    let subdivision = Subdivision::take_from_pairs(name, &mut params)?;
     for (i, &(key, value)) in params.iter().enumerate() {
         if !b.params.iter().any(|p| p.name == key) {
-            let valid: Vec<&str> = b.params.iter().map(|p| p.name).collect();
+            let valid: Vec<&str> =
+                b.params.iter().chain(SUBDIVISION_PARAMS).map(|p| p.name).collect();
             return Err(unknown(name, key, value, &valid));
         }
         if params[..i].iter().any(|&(k, _)| k == key) {
@@ -222,7 +231,11 @@ pub fn builtin(name: &str, params: &[(&str, &str)]) -> Result<Scene> {
             });
         }
     }
-    (b.build)(params)
+    let scene = (b.build)(&params)?;
+    match subdivision {
+        Some(s) => s.apply(scene),
+        None => Ok(scene),
+    }
 }
 
 /// Splits a spec `NAME[?KEY=VALUE&…]` into its name and pairs, without building anything.

@@ -115,7 +115,7 @@ fn bad_specs_say_what_is_valid() {
     let e = err("forest?tress=3");
     assert!(e.contains("forest.tress") && e.contains("trees, leaves"), "{e}");
     let e = err("cube?size=2");
-    assert!(e.contains("cube.size") && e.contains("takes none"), "{e}");
+    assert!(e.contains("cube.size") && e.contains("takes: subdivide, subdivision"), "{e}");
     let e = err("forest?trees=2&trees=3");
     assert!(e.contains("forest.trees") && e.contains("more than once"), "{e}");
     let e = err("forest?trees=0");
@@ -144,4 +144,20 @@ fn target_triangles_through_the_spec() {
     // The ground still spans the (grown or shrunk) extent, centred at the origin.
     let (lo, hi) = s.bounds().unwrap();
     assert!((lo.x + hi.x).abs() < 0.1 * (hi.x - lo.x) && lo.y < 0.0 && hi.y > 1.0, "{lo} {hi}");
+}
+
+#[test]
+fn every_builtin_takes_the_subdivision_parameters() {
+    let a = from_spec("sphere?subdiv=1&subdivide=2").unwrap();
+    assert_eq!(a.triangle_count(), 80 * 16);
+    let b = from_spec("sphere?subdivide=2&subdiv=1&subdivision=midpoint").unwrap();
+    assert_eq!(a, b);
+    let c = from_spec("sphere?subdiv=1&subdivide=2&subdivision=loop").unwrap();
+    assert_eq!(c.triangle_count(), 80 * 16);
+    assert_ne!(a, c);
+    c.validate().unwrap();
+    let e = from_spec("forest?trees=2&subdivision=loop").unwrap_err().to_string();
+    assert!(e.contains("forest.subdivision") && e.contains("needs subdivide"), "{e}");
+    let e = from_spec("forest?trees=2&leaves=200&subdivide=9").unwrap_err().to_string();
+    assert!(e.contains("forest.subdivide") && e.contains("0..=8"), "{e}");
 }
