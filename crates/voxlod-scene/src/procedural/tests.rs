@@ -2,7 +2,7 @@
 //! deterministic, seed-sensitive, framed by its camera), the spec syntax and its errors, and the
 //! listed parameter defaults against the parameter structs' `Default`.
 
-use super::registry::{blinds_params, crowd_params, forest_params, island_params};
+use super::registry::{blinds_params, city_params, crowd_params, forest_params, island_params};
 use super::testutil::scene_hash;
 use super::*;
 use crate::Scene;
@@ -12,6 +12,7 @@ const SMALL: &[&str] = &[
     "forest?trees=2&leaves=200",
     "island?terrain=24&grass=500&rocks=2",
     "blinds?slats=16",
+    "city?blocks=1&max_floors=4",
     "crowd?walkers=2&rigid=2&sides=8",
     "bumpy-sphere?subdiv=2",
     "bumpy-specular?subdiv=2",
@@ -52,9 +53,14 @@ fn every_builtin_builds_valid_deterministic_scenes() {
 
 #[test]
 fn default_scenes_validate_and_have_the_documented_counts() {
-    for (name, count) in
-        [("forest", 294_776), ("blinds", 1_554), ("crowd", 60_898), ("cornell", 34), ("cube", 12)]
-    {
+    for (name, count) in [
+        ("forest", 294_776),
+        ("city", 164_184),
+        ("blinds", 1_554),
+        ("crowd", 60_898),
+        ("cornell", 34),
+        ("cube", 12),
+    ] {
         let s = builtin(name, &[]).unwrap();
         s.validate().unwrap();
         assert_eq!(s.triangle_count(), count, "{name}");
@@ -80,6 +86,9 @@ fn listed_defaults_are_the_struct_defaults() {
     }
     for (k, v) in pairs("blinds") {
         assert_eq!(blinds_params(&[(k, v)]).unwrap(), BlindsParams::default(), "{k}={v}");
+    }
+    for (k, v) in pairs("city") {
+        assert_eq!(city_params(&[(k, v)]).unwrap(), CityParams::default(), "{k}={v}");
     }
     for (k, v) in pairs("crowd") {
         assert_eq!(crowd_params(&[(k, v)]).unwrap(), CrowdParams::default(), "{k}={v}");
@@ -111,7 +120,7 @@ fn spec_parsing() {
 fn bad_specs_say_what_is_valid() {
     let err = |spec: &str| from_spec(spec).unwrap_err().to_string();
     let e = err("jungle?trees=3");
-    assert!(e.contains("jungle") && e.contains("forest, island, blinds"), "{e}");
+    assert!(e.contains("jungle") && e.contains("forest, island, city, blinds"), "{e}");
     let e = err("forest?tress=3");
     assert!(e.contains("forest.tress") && e.contains("trees, leaves"), "{e}");
     let e = err("cube?size=2");
