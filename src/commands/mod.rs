@@ -176,6 +176,10 @@ pub fn scenes() -> Result<()> {
             }
         }
     }
+    println!("\nThe paper's test scenes (Brito, Poulin and Teichrieb 2023, §5) as presets:\n");
+    for (name, spec) in voxlod::studies::scenes::PAPER_SCENES {
+        println!("  {name:<14} {spec}");
+    }
     Ok(())
 }
 

@@ -138,3 +138,21 @@ fn midpoint_split_off_the_lattice_changes_few_voxels_and_only_next_to_the_surfac
         }
     }
 }
+
+#[test]
+fn paper_scenes_have_the_papers_order_of_triangles() {
+    // The bunny here; the procedural ones (a few seconds each) with VOXLOD_HEAVY_TESTS=1.
+    let heavy = std::env::var("VOXLOD_HEAVY_TESTS").is_ok_and(|v| !v.is_empty() && v != "0");
+    let paper = [("Bunny", 144_000), ("Trees", 540_000), ("Island", 307_000), ("City", 635_000)];
+    assert_eq!(PAPER_SCENES.len(), paper.len());
+    for (&(name, spec), (paper_name, paper_count)) in PAPER_SCENES.iter().zip(paper) {
+        assert_eq!(name, paper_name);
+        if name != "Bunny" && !heavy {
+            continue;
+        }
+        let n = load(spec).unwrap().triangle_count() as f64;
+        println!("{name}: {spec} has {n} triangles (paper: {paper_count})");
+        assert!((100_000.0..1_000_000.0).contains(&n), "{spec}: {n}");
+        assert!(n / paper_count as f64 > 0.98 && n / (paper_count as f64) < 1.7, "{spec}: {n}");
+    }
+}
