@@ -161,6 +161,14 @@ pub fn compare_images(args: CompareArgs) -> Result<()> {
 /// `voxlod scenes`.
 pub fn scenes() -> Result<()> {
     println!("Builtin scenes (use as builtin:NAME or builtin:NAME?KEY=VALUE&KEY=VALUE):\n");
+    println!(
+        "  Every scene, builtin or file (PATH?subdivide=N when PATH?... is not a file), takes:"
+    );
+    for p in voxlod::scene::subdivide::PARAMS {
+        let default = p.default.map_or(String::new(), |d| format!(" (default {d})"));
+        println!("      {:<12} {}{default}", p.name, p.description);
+    }
+    println!();
     for (name, description) in voxlod::studies::scenes::builtin_names() {
         println!("  {name:<14} {description}");
         if let Ok(params) = voxlod::scene::procedural::builtin_params(name) {
@@ -169,6 +177,10 @@ pub fn scenes() -> Result<()> {
                 println!("      {:<12} {}{default}", p.name, p.description);
             }
         }
+    }
+    println!("\nThe paper's test scenes (Brito, Poulin and Teichrieb 2023, §5) as presets:\n");
+    for (name, spec) in voxlod::studies::scenes::PAPER_SCENES {
+        println!("  {name:<14} {spec}");
     }
     Ok(())
 }

@@ -63,6 +63,7 @@
 //! | [`obj`], [`gltf`] | the loaders, each with a `LoadReport` of what was skipped or repaired and a `load_from_bytes` that reads companion files through a resolver |
 //! | [`animation`] | node hierarchies, skins and animations sampled at a time (step, linear, cubic spline): [`Pose`], joint matrices |
 //! | [`procedural`] | `forest`, `island`, `blinds`, `crowd` (skinned walkers and rotating rigid objects, animated) and `cornell`, `cube`, `sphere`, by name ([`procedural::from_spec`]) or from parameter structs; pure functions of their parameters and seed |
+//! | [`subdivide`] | midpoint (surface kept) and Loop 1987 (smoothed) subdivision of meshes and scenes; the `subdivide=N&subdivision=…` spec parameters |
 //! | [`particles`] | displaced spheres, their animation, and deterministic smoke, explosion and cloud generators |
 //!
 //! # Errors
@@ -91,6 +92,8 @@
 //!
 //! # References
 //! - McNabb 2015, "Sparse Procedural Volume Rendering", GPU Pro 6, §5.5.2: [`particles`].
+//! - Loop 1987, "Smooth Subdivision Surfaces Based on Triangles", M.S. thesis, University of
+//!   Utah: [`subdivide`].
 //! - Steele, Lea, Flood 2014, "Fast Splittable Pseudorandom Number Generators", OOPSLA
 //!   (SplitMix64): [`procedural::Rng`].
 
@@ -108,6 +111,7 @@ pub mod obj;
 pub mod particles;
 pub mod procedural;
 pub mod scene;
+pub mod subdivide;
 pub mod texture;
 
 pub use animation::{Animation, Node, Pose, Skin, Transform};

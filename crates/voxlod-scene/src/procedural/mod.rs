@@ -8,14 +8,15 @@
 //! | [`blinds`](mod@blinds) | tilted two-coloured slats spaced below a voxel, before a striped wall | directional opacity and colour with a closed-form answer |
 //! | [`crowd`](mod@crowd) | skinned walkers (17 joints, a walk cycle) among rotating tori and cubes on a static floor, animated | dynamic scenes: voxel transformation of rigid and skinned objects against re-voxelization |
 //! | [`bumpy`](mod@bumpy) (`bumpy-sphere`, `bumpy-specular`) | a closed sphere with fine fractal displacement, colour correlated with height or one glossy grey | view- and light-dependent colour and roughness from sub-pixel relief (Heitz and Neyret 2012) |
+//! | [`city`](mod@city) | city blocks: buildings with recessed windows as geometry, streets with markings, sidewalks, lamp posts, benches, parked cars | large occluders with sub-voxel relief (two surfaces and jambs in a voxel), many distinct colours, small closed props |
 //! | `cornell`, `cube`, `sphere` | [`primitives`] | analytic checks |
 //!
-//! Triangle counts at default parameters: `forest` 294 776, `island` about 142 000, `blinds`
-//! 1 554, `bumpy-sphere` and `bumpy-specular` 81 920, `crowd` 60 898 (16 walkers, 16 objects),
+//! Triangle counts at default parameters: `forest` 294 776, `island` about 142 000, `city`
+//! 164 184, `blinds` 1 554, `bumpy-sphere` and `bumpy-specular` 81 920, `crowd` 60 898 (16 walkers, 16 objects),
 //! `cornell` 34, `cube` 12, `sphere` 1 280. Build one by name with
 //! [`builtin`]`("forest", &[("trees", "20")])` or [`from_spec`]`("forest?trees=20&seed=3")`
 //! (the syntax is in [`registry`]), or directly from a parameter struct ([`ForestParams`],
-//! [`IslandParams`], [`BlindsParams`]), whose fields document their ranges and cost.
+//! [`IslandParams`], [`CityParams`], [`BlindsParams`]), whose fields document their ranges and cost.
 //!
 //! ```
 //! use voxlod_scene::procedural::{ForestParams, forest, from_spec};
@@ -39,6 +40,7 @@
 pub mod blinds;
 mod builder;
 pub mod bumpy;
+pub mod city;
 pub mod crowd;
 pub mod forest;
 pub mod island;
@@ -57,6 +59,7 @@ use glam::Vec3;
 
 pub use blinds::{BlindsParams, SlatGeometry, blinds};
 pub use bumpy::{BumpyParams, bumpy};
+pub use city::{CityParams, city};
 pub use crowd::{CrowdParams, crowd};
 pub use forest::{ForestParams, forest};
 pub use island::{IslandParams, island};

@@ -6,6 +6,10 @@
 //! decimal, numbers anything Rust's `f32` parser accepts, booleans `true`/`false`/`1`/`0`.
 //! Unknown scenes, unknown or repeated keys, malformed pairs and out-of-range values are all an
 //! [`Error::InvalidParameter`] that names the scene and key and says what is valid.
+//!
+//! Every builtin also takes `subdivide=N` and `subdivision=midpoint|loop`
+//! ([`crate::subdivide::PARAMS`]): the scene is built, then each of its meshes subdivided `N`
+//! times (`4^N` as many triangles), e.g. `sphere?subdiv=2&subdivide=2&subdivision=loop`.
 
 use std::sync::LazyLock;
 
@@ -14,9 +18,10 @@ use glam::Vec3;
 use super::param::{parse, parse_bool, unknown};
 use super::primitives::{cornell_box, cube, icosphere, scene_with};
 use super::{
-    BlindsParams, BumpyParams, CrowdParams, ForestParams, IslandParams, blinds, bumpy, crowd,
-    forest, island,
+    BlindsParams, BumpyParams, CityParams, CrowdParams, ForestParams, IslandParams, blinds, bumpy,
+    city, crowd, forest, island,
 };
+use crate::subdivide::{PARAMS as SUBDIVISION_PARAMS, Subdivision};
 use crate::{Error, Material, Result, Scene};
 
 /// One parameter of a builtin scene.
@@ -72,6 +77,22 @@ const ISLAND_PARAMS: &[ParamInfo] = &[
     param("blade_width", "0.012", "widest blade base, (0, blade_height]"),
 ];
 
+const CITY_PARAMS: &[ParamInfo] = &[
+    param("blocks", "3", "blocks per side, 1..=64"),
+    param("seed", "1", "random seed, any u64"),
+    param("detail", "1", "0: plain walls, 1: recessed windows, 2: with sills and mullions"),
+    param("block_size", "48", "side of a block with its sidewalk in metres, 16..=1000"),
+    param("street_width", "12", "street width in metres, 4..=100"),
+    param("max_floors", "16", "most floors of a building (3.2 m each), 2..=200"),
+    param("window_spacing", "2.5", "facade bay width (one window per floor), 1..=50"),
+    ParamInfo {
+        name: "triangles",
+        default: None,
+        description: "size the city to at least this many triangles (sets blocks and \
+                      window_spacing; not with them)",
+    },
+];
+
 const BLINDS_PARAMS: &[ParamInfo] = &[
     param("slats", "128", "number of slats (12 triangles each), 2..=4096"),
     param("tilt", "20", "slat tilt in degrees, -89..=89 (0 = open)"),
@@ -120,6 +141,12 @@ const BUILTINS: &[Builtin] = &[
         description: "heightfield island in a specular sea, rocks, thin grass blades",
         params: ISLAND_PARAMS,
         build: |kv| island(&island_params(kv)?),
+    },
+    Builtin {
+        name: "city",
+        description: "city blocks: buildings with recessed windows, streets, sidewalks, lamps, benches, cars",
+        params: CITY_PARAMS,
+        build: |kv| city(&city_params(kv)?),
     },
     Builtin {
         name: "blinds",
@@ -206,12 +233,16 @@ pub fn builtin_params(name: &str) -> Result<&'static [ParamInfo]> {
     Ok(find(name)?.params)
 }
 
-/// Builds builtin `name` with `params` as `(key, value)` pairs (see the module docs).
+/// Builds builtin `name` with `params` as `(key, value)` pairs (see the module docs), then
+/// subdivides it if the pairs include `subdivide` ([`crate::subdivide::Subdivision`]).
 pub fn builtin(name: &str, params: &[(&str, &str)]) -> Result<Scene> {
     let b = find(name)?;
+    let mut params = params.to_vec();
+    let subdivision = Subdivision::take_from_pairs(name, &mut params)?;
     for (i, &(key, value)) in params.iter().enumerate() {
         if !b.params.iter().any(|p| p.name == key) {
-            let valid: Vec<&str> = b.params.iter().map(|p| p.name).collect();
+            let valid: Vec<&str> =
+                b.params.iter().chain(SUBDIVISION_PARAMS).map(|p| p.name).collect();
             return Err(unknown(name, key, value, &valid));
         }
         if params[..i].iter().any(|&(k, _)| k == key) {
@@ -222,7 +253,11 @@ pub fn builtin(name: &str, params: &[(&str, &str)]) -> Result<Scene> {
             });
         }
     }
-    (b.build)(params)
+    let scene = (b.build)(&params)?;
+    match subdivision {
+        Some(s) => s.apply(scene),
+        None => Ok(scene),
+    }
 }
 
 /// Splits a spec `NAME[?KEY=VALUE&…]` into its name and pairs, without building anything.
@@ -361,6 +396,40 @@ pub(super) fn blinds_params(kv: &[(&str, &str)]) -> Result<BlindsParams> {
             "extent" => p.extent = parse("blinds", k, v)?,
             _ => return Err(unknown("blinds", k, v, &[])),
         }
+    }
+    p.validate()?;
+    Ok(p)
+}
+
+/// [`CityParams`] from spec pairs.
+pub(super) fn city_params(kv: &[(&str, &str)]) -> Result<CityParams> {
+    let mut p = CityParams::default();
+    let mut target = None;
+    for &(k, v) in kv {
+        let c = "city";
+        match k {
+            "blocks" => p.blocks = parse(c, k, v)?,
+            "seed" => p.seed = parse(c, k, v)?,
+            "detail" => p.detail = parse(c, k, v)?,
+            "block_size" => p.block_size = parse(c, k, v)?,
+            "street_width" => p.street_width = parse(c, k, v)?,
+            "max_floors" => p.max_floors = parse(c, k, v)?,
+            "window_spacing" => p.window_spacing = parse(c, k, v)?,
+            "triangles" => target = Some((v, parse::<u64>(c, k, v)?)),
+            _ => return Err(unknown(c, k, v, &[])),
+        }
+    }
+    if let Some((text, target)) = target {
+        if kv.iter().any(|&(k, _)| k == "blocks" || k == "window_spacing") {
+            return Err(Error::InvalidParameter {
+                name: "city.triangles".into(),
+                value: text.into(),
+                reason: "sets blocks and window_spacing itself: give either triangles or them"
+                    .into(),
+            });
+        }
+        p.validate()?;
+        p = p.fit_triangles(target);
     }
     p.validate()?;
     Ok(p)

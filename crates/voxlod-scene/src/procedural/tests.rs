@@ -2,7 +2,7 @@
 //! deterministic, seed-sensitive, framed by its camera), the spec syntax and its errors, and the
 //! listed parameter defaults against the parameter structs' `Default`.
 
-use super::registry::{blinds_params, crowd_params, forest_params, island_params};
+use super::registry::{blinds_params, city_params, crowd_params, forest_params, island_params};
 use super::testutil::scene_hash;
 use super::*;
 use crate::Scene;
@@ -12,6 +12,7 @@ const SMALL: &[&str] = &[
     "forest?trees=2&leaves=200",
     "island?terrain=24&grass=500&rocks=2",
     "blinds?slats=16",
+    "city?blocks=1&max_floors=4",
     "crowd?walkers=2&rigid=2&sides=8",
     "bumpy-sphere?subdiv=2",
     "bumpy-specular?subdiv=2",
@@ -52,9 +53,14 @@ fn every_builtin_builds_valid_deterministic_scenes() {
 
 #[test]
 fn default_scenes_validate_and_have_the_documented_counts() {
-    for (name, count) in
-        [("forest", 294_776), ("blinds", 1_554), ("crowd", 60_898), ("cornell", 34), ("cube", 12)]
-    {
+    for (name, count) in [
+        ("forest", 294_776),
+        ("city", 164_184),
+        ("blinds", 1_554),
+        ("crowd", 60_898),
+        ("cornell", 34),
+        ("cube", 12),
+    ] {
         let s = builtin(name, &[]).unwrap();
         s.validate().unwrap();
         assert_eq!(s.triangle_count(), count, "{name}");
@@ -80,6 +86,9 @@ fn listed_defaults_are_the_struct_defaults() {
     }
     for (k, v) in pairs("blinds") {
         assert_eq!(blinds_params(&[(k, v)]).unwrap(), BlindsParams::default(), "{k}={v}");
+    }
+    for (k, v) in pairs("city") {
+        assert_eq!(city_params(&[(k, v)]).unwrap(), CityParams::default(), "{k}={v}");
     }
     for (k, v) in pairs("crowd") {
         assert_eq!(crowd_params(&[(k, v)]).unwrap(), CrowdParams::default(), "{k}={v}");
@@ -111,11 +120,11 @@ fn spec_parsing() {
 fn bad_specs_say_what_is_valid() {
     let err = |spec: &str| from_spec(spec).unwrap_err().to_string();
     let e = err("jungle?trees=3");
-    assert!(e.contains("jungle") && e.contains("forest, island, blinds"), "{e}");
+    assert!(e.contains("jungle") && e.contains("forest, island, city, blinds"), "{e}");
     let e = err("forest?tress=3");
     assert!(e.contains("forest.tress") && e.contains("trees, leaves"), "{e}");
     let e = err("cube?size=2");
-    assert!(e.contains("cube.size") && e.contains("takes none"), "{e}");
+    assert!(e.contains("cube.size") && e.contains("takes: subdivide, subdivision"), "{e}");
     let e = err("forest?trees=2&trees=3");
     assert!(e.contains("forest.trees") && e.contains("more than once"), "{e}");
     let e = err("forest?trees=0");
@@ -144,4 +153,20 @@ fn target_triangles_through_the_spec() {
     // The ground still spans the (grown or shrunk) extent, centred at the origin.
     let (lo, hi) = s.bounds().unwrap();
     assert!((lo.x + hi.x).abs() < 0.1 * (hi.x - lo.x) && lo.y < 0.0 && hi.y > 1.0, "{lo} {hi}");
+}
+
+#[test]
+fn every_builtin_takes_the_subdivision_parameters() {
+    let a = from_spec("sphere?subdiv=1&subdivide=2").unwrap();
+    assert_eq!(a.triangle_count(), 80 * 16);
+    let b = from_spec("sphere?subdivide=2&subdiv=1&subdivision=midpoint").unwrap();
+    assert_eq!(a, b);
+    let c = from_spec("sphere?subdiv=1&subdivide=2&subdivision=loop").unwrap();
+    assert_eq!(c.triangle_count(), 80 * 16);
+    assert_ne!(a, c);
+    c.validate().unwrap();
+    let e = from_spec("forest?trees=2&subdivision=loop").unwrap_err().to_string();
+    assert!(e.contains("forest.subdivision") && e.contains("needs subdivide"), "{e}");
+    let e = from_spec("forest?trees=2&leaves=200&subdivide=9").unwrap_err().to_string();
+    assert!(e.contains("forest.subdivide") && e.contains("0..=8"), "{e}");
 }
