@@ -2,13 +2,16 @@
 //! to the rendered image.
 //!
 //! # Measured contribution
-//! Every voxel of the grid is rendered as kind `from` (by default Averages), the base images;
-//! then, for each sampled voxel alone, the same frames are rendered with that one voxel
-//! switched to kind `to` (by default the virtual mesh). The voxel's **measured benefit** is the
+//! Every voxel of the grid is rendered as kind `from` (by default the virtual mesh), the base
+//! images; then, for each sampled voxel alone, the same frames are rendered with that one
+//! voxel switched to kind `to` (by default Averages: the selector's question, which voxels
+//! keep their image when made cheap). The voxel's **measured benefit** is the
 //! drop of the squared error against the reference images, summed over the pixels, colour
 //! channels and views and divided by their count (a change of MSE on the [0, 1] sRGB scale;
 //! positive when the switch helps). The renderer is deterministic, so a switch that changes no
-//! pixel measures exactly 0; its shadows are on, so a voxel that only shadows others counts.
+//! pixel measures exactly 0; its shadows are on, so a voxel that only shadows others counts
+//! (which makes almost every switch change some pixel a little: the correlations are also
+//! given over the voxels whose switch moves a pixel by half an 8-bit step).
 //! Errors are computed on the renders' unquantized sRGB values against the 8-bit references.
 //!
 //! # Predicted benefit
@@ -48,8 +51,8 @@ impl Default for ContributionOptions {
     fn default() -> Self {
         Self {
             samples: 256,
-            from: Kind::Average,
-            to: Kind::VirtualMesh,
+            from: Kind::VirtualMesh,
+            to: Kind::Average,
             render: filtered::Options { width: 64, height: 64, ..Default::default() },
         }
     }
@@ -62,6 +65,9 @@ pub struct VoxelContribution {
     pub voxel: usize,
     /// Measured drop of the MSE when the voxel alone switches.
     pub measured: f64,
+    /// Whether the switch moved some pixel of some view by at least half an 8-bit sRGB step
+    /// (it would change the 8-bit image).
+    pub changed: bool,
     /// Predicted benefit by the held-out directional error.
     pub heldout: f64,
     /// Predicted benefit by the image error.
@@ -73,7 +79,7 @@ pub struct VoxelContribution {
 pub struct ContributionCheck {
     /// Every measured voxel.
     pub voxels: Vec<VoxelContribution>,
-    /// How many of them changed the image when switched.
+    /// How many of them changed the 8-bit image when switched ([`VoxelContribution::changed`]).
     pub changed: usize,
     /// Spearman correlation of the held-out prediction with the measured benefit, all voxels.
     pub heldout_spearman: f64,
@@ -176,21 +182,24 @@ impl Appearance for Switched<'_> {
     }
 }
 
-/// Per pixel, the squared sRGB error of `image` against `reference`, summed over channels.
-fn squared_errors(image: &Image, reference: &Srgb8Image) -> Vec<f64> {
+/// Per pixel and channel, the sRGB value of `image` (clamped to [0, 1]).
+fn srgb(image: &Image) -> Vec<[f64; 3]> {
     image
         .pixels
         .iter()
-        .zip(&reference.pixels)
-        .map(|(p, r)| {
-            (0..3)
-                .map(|c| {
-                    let v = linear_to_srgb(p[c].clamp(0.0, 1.0)) as f64;
-                    (v - r[c] as f64 / 255.0).powi(2)
-                })
-                .sum()
-        })
+        .map(|p| std::array::from_fn(|c| linear_to_srgb(p[c].clamp(0.0, 1.0)) as f64))
         .collect()
+}
+
+/// Sum of the squared errors of `values` against `reference`.
+fn squared_error(values: &[[f64; 3]], reference: &Srgb8Image) -> f64 {
+    let mut sum = 0.0;
+    for (v, r) in values.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            sum += (v[c] - r[c] as f64 / 255.0).powi(2);
+        }
+    }
+    sum
 }
 
 /// Measures the benefit of switching each sampled voxel of `candidates` (module docs) in the
@@ -229,31 +238,33 @@ pub fn measure(
     let n = candidates.len();
     let base = candidates.select_kinds(&vec![options.from; n])?;
     let alt = candidates.select_kinds(&vec![options.to; n])?;
-    let render = |app: &dyn Appearance| -> Result<Vec<Vec<f64>>> {
+    let render = |app: &dyn Appearance| -> Result<Vec<Vec<[f64; 3]>>> {
         let mut cache = FrameCache::new(app)?;
         cameras
             .iter()
-            .zip(references)
-            .map(|(camera, reference)| {
+            .map(|camera| {
                 let image =
                     filtered::render(&mut cache, camera, light, background, &options.render)?;
-                Ok(squared_errors(&image, reference))
+                Ok(srgb(&image))
             })
             .collect()
     };
-    let base_errors = render(&base)?;
+    let base_images = render(&base)?;
+    let base_error: f64 =
+        base_images.iter().zip(references).map(|(b, r)| squared_error(b, r)).sum();
     let samples = options.samples.min(n);
     let picked: Vec<usize> = (0..samples).map(|s| s * n / samples).collect();
     let per_value = (w as f64) * (h as f64) * 3.0 * cameras.len() as f64;
-    let measured: Vec<f64> = picked
+    // Per voxel: the drop of the MSE, and whether some pixel moved by half an 8-bit step.
+    let measured: Vec<(f64, bool)> = picked
         .par_iter()
         .map(|&v| {
-            let errors = render(&Switched { base: &base, alt: &alt, switched: v })?;
-            let mut drop = 0.0;
-            for (b, e) in base_errors.iter().zip(&errors) {
-                drop += b.iter().zip(e).map(|(b, e)| b - e).sum::<f64>();
-            }
-            Ok(drop / per_value)
+            let images = render(&Switched { base: &base, alt: &alt, switched: v })?;
+            let error: f64 = images.iter().zip(references).map(|(i, r)| squared_error(i, r)).sum();
+            let moved = images.iter().zip(&base_images).any(|(i, b)| {
+                i.iter().zip(b).any(|(p, q)| (0..3).any(|c| (p[c] - q[c]).abs() >= 0.5 / 255.0))
+            });
+            Ok(((base_error - error) / per_value, moved))
         })
         .collect::<Result<_>>()?;
     let (from, to) = (kind_slot(options.from), kind_slot(options.to));
@@ -262,21 +273,22 @@ pub fn measure(
     let voxels: Vec<VoxelContribution> = picked
         .iter()
         .zip(&measured)
-        .map(|(&v, &m)| VoxelContribution {
+        .map(|(&v, &(m, moved))| VoxelContribution {
             voxel: v,
             measured: m,
+            changed: moved,
             heldout: (heldout[v][from] - heldout[v][to]) as f64,
             image: (image[v][from] as f64).powi(2) - (image[v][to] as f64).powi(2),
         })
         .collect();
     let column = |f: fn(&VoxelContribution) -> f64, only_changed: bool| -> Vec<f64> {
-        voxels.iter().filter(|c| !only_changed || c.measured != 0.0).map(f).collect()
+        voxels.iter().filter(|c| !only_changed || c.changed).map(f).collect()
     };
     let rank = |f: fn(&VoxelContribution) -> f64, only_changed: bool| {
         spearman(&column(f, only_changed), &column(|c| c.measured, only_changed))
     };
     Ok(ContributionCheck {
-        changed: voxels.iter().filter(|c| c.measured != 0.0).count(),
+        changed: voxels.iter().filter(|c| c.changed).count(),
         heldout_spearman: rank(|c| c.heldout, false)?,
         image_spearman: rank(|c| c.image, false)?,
         heldout_spearman_changed: rank(|c| c.heldout, true)?,

@@ -95,9 +95,9 @@ impl<'a> HeldOut<'a> {
         for (r, &b) in self.samples.rays.iter().zip(&self.bin) {
             predicted[b as usize] += 1.0 - ops[b as usize].apply(1.0, r.chord);
         }
-        for b in 0..14 {
-            if self.rays[b] > 0 {
-                predicted[b] /= self.rays[b] as f32;
+        for (p, &n) in predicted.iter_mut().zip(&self.rays) {
+            if n > 0 {
+                *p /= n as f32;
             }
         }
         predicted

@@ -151,7 +151,7 @@ pub(super) fn visibilities(
 /// per bin, the sRGB difference of the pixel composited with the candidate's opacity and
 /// radiance against the truth, everything else at the truth; the root mean square over bins
 /// and colour channels.
-pub(super) struct Scene<'a> {
+pub(super) struct Compositor<'a> {
     pub index: &'a BrickMap<()>,
     pub grid: &'a GridSpec,
     pub coords: &'a [UVec3],
@@ -161,7 +161,7 @@ pub(super) struct Scene<'a> {
     pub background: Vec3,
 }
 
-impl Scene<'_> {
+impl Compositor<'_> {
     /// The image error of each candidate of voxel `i`, whose radiance toward `−BINS[b]` is
     /// `radiance[k][b]`.
     pub fn errors(&self, i: usize, radiance: &[[Vec3; 14]; 3]) -> [f32; 3] {

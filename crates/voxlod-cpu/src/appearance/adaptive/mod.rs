@@ -448,7 +448,7 @@ fn image_errors(
             })
         })
         .collect();
-    let scene = image::Scene { index: &index, grid, coords, bins, truth: &truth, background };
+    let scene = image::Compositor { index: &index, grid, coords, bins, truth: &truth, background };
     let errors: Vec<[f32; 3]> =
         (0..voxels.len()).into_par_iter().map(|i| scene.errors(i, &radiance[i])).collect();
     for (v, e) in voxels.iter_mut().zip(errors) {
