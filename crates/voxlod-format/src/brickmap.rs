@@ -167,6 +167,7 @@ impl<T> BrickMap<T> {
             map.values.push(v);
         }
         check_value_count(map.values.len())?;
+        map.shrink_to_fit();
         map.rebuild_lookup();
         Ok(map)
     }
@@ -367,11 +368,25 @@ impl<T> BrickMap<T> {
         })
     }
 
-    /// Heap bytes held: brick headers, values and the lookup table.
+    /// Bytes per brick of the brick look-up as a renderer stores it packed: a (Morton code,
+    /// brick index) pair.
+    pub const LOOKUP_ENTRY_BYTES: usize = size_of::<u64>() + size_of::<u32>();
+
+    /// Packed bytes of the map, what a renderer needs to hold it: the brick headers, the values
+    /// and the brick look-up as [`BrickMap::LOOKUP_ENTRY_BYTES`] per brick. Counted from
+    /// lengths, not capacities, so neither `Vec` growth slack nor the hash table's empty slots
+    /// inflate it: `bricks().len() · size_of::<BrickHeader>() + len() · size_of::<T>() +
+    /// bricks().len() · LOOKUP_ENTRY_BYTES`, exactly.
     pub fn memory_bytes(&self) -> usize {
-        self.bricks.capacity() * size_of::<BrickHeader>()
-            + self.values.capacity() * size_of::<T>()
-            + self.lookup.capacity() * (size_of::<u64>() + size_of::<u32>() + 1)
+        self.bricks.len() * (size_of::<BrickHeader>() + Self::LOOKUP_ENTRY_BYTES)
+            + self.values.len() * size_of::<T>()
+    }
+
+    /// Releases the brick and value arrays' growth slack (their capacity becomes their length).
+    pub fn shrink_to_fit(&mut self) {
+        self.bricks.shrink_to_fit();
+        self.values.shrink_to_fit();
+        self.lookup.shrink_to_fit();
     }
 
     /// Checks every structural invariant: bricks strictly sorted and inside the grid, masks
@@ -602,6 +617,27 @@ mod tests {
         assert_eq!(map.bricks().len(), 1);
         assert!(map.memory_bytes() < 1024, "{} bytes", map.memory_bytes());
         assert_eq!(map.get(UVec3::splat(123_456)), Some(&7));
+    }
+
+    #[test]
+    fn memory_is_the_packed_size_without_growth_slack() {
+        // 11 voxels in 3 bricks, pushed through an iterator without a size hint so that the
+        // value array grows by doubling while it is built.
+        let dims = UVec3::splat(32);
+        let coords: Vec<UVec3> = (0..9)
+            .map(|i| UVec3::new(i % 4, i / 4, 0))
+            .chain([UVec3::new(9, 0, 0), UVec3::new(31, 31, 31)])
+            .collect();
+        let mut codes: Vec<u64> = coords.iter().map(|&c| morton::encode(c)).collect();
+        codes.sort_unstable();
+        let unsized_iter = codes.iter().filter(|_| true).map(|&c| (c, [0u8; 12]));
+        let map = BrickMap::from_morton_sorted(dims, unsized_iter).unwrap();
+        assert_eq!((map.len(), map.bricks().len()), (11, 3));
+        assert_eq!(map.values.capacity(), map.len());
+        assert_eq!(map.bricks.capacity(), map.bricks().len());
+        let header = size_of::<BrickHeader>() + BrickMap::<[u8; 12]>::LOOKUP_ENTRY_BYTES;
+        assert_eq!(header, 92);
+        assert_eq!(map.memory_bytes(), 3 * 92 + 11 * 12);
     }
 
     #[test]

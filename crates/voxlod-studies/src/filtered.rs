@@ -9,11 +9,12 @@
 
 use std::time::{Duration, Instant};
 
-use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::adaptive::contribution::ContributionOptions;
+use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions, Selector};
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
 use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
 use voxlod_cpu::render::filtered::{self, FrameCache};
 use voxlod_cpu::voxelize::{self, Mode};
@@ -40,8 +41,17 @@ pub struct FilteredConfig {
     pub rays: u32,
     /// Held-out rays per voxel for the Adaptive selector's error estimate.
     pub heldout: u32,
-    /// Adaptive thresholds, one report row each.
+    /// Adaptive thresholds of the held-out directional error, one report row each.
     pub thresholds: Vec<f32>,
+    /// Adaptive thresholds of the image-error selector ([`adaptive::Selector::Image`]), one
+    /// report row each (none by default).
+    pub image_thresholds: Vec<f32>,
+    /// Voxels whose measured image contribution ranks the two selectors' errors
+    /// ([`adaptive::contribution`]) at every resolution, at the image side equal to it
+    /// (0: no check).
+    pub contribution_samples: usize,
+    /// Directional-opacity rule and shading samples of Adaptive's virtual-mesh candidate.
+    pub adaptive_vmesh: VirtualMeshParams,
 }
 
 impl FilteredConfig {
@@ -53,6 +63,9 @@ impl FilteredConfig {
             rays: 150,
             heldout: adaptive::DEFAULT_HELDOUT,
             thresholds: vec![0.1, 0.2, 0.3],
+            image_thresholds: Vec::new(),
+            contribution_samples: 0,
+            adaptive_vmesh: VirtualMeshParams::default(),
         }
     }
 
@@ -86,6 +99,11 @@ impl FilteredConfig {
         for &t in &self.thresholds {
             if !(t.is_finite() && t >= 0.0) {
                 return bad("thresholds", t.to_string(), "finite and >= 0");
+            }
+        }
+        for &t in &self.image_thresholds {
+            if !(t.is_finite() && t >= 0.0) {
+                return bad("image_thresholds", t.to_string(), "finite and >= 0");
             }
         }
         Ok(())
@@ -141,10 +159,34 @@ pub struct FilteredResult {
     pub rows: Vec<MethodRow>,
     /// Resolutions skipped for the time budget.
     pub skipped: Vec<u32>,
+    /// Per resolution, the Adaptive selectors' errors ranked against the measured per-voxel
+    /// image contribution (with [`FilteredConfig::contribution_samples`] > 0).
+    pub predictor: Vec<PredictorCheck>,
     /// Per resolution: view 0 at the image side equal to the resolution — the ground truth,
     /// then each method and its error heat map (the paper's Fig. 11).
     #[serde(skip)]
     pub images: Vec<(u32, Vec<LabeledImage>)>,
+}
+
+/// The Adaptive selectors' errors against the measured per-voxel image contribution at one
+/// resolution ([`adaptive::contribution::measure`]: the virtual mesh everywhere, one voxel
+/// switched to Averages).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PredictorCheck {
+    /// Voxels along the longest axis (and image side).
+    pub resolution: u32,
+    /// Voxels measured.
+    pub samples: usize,
+    /// How many of them changed the image when switched.
+    pub changed: usize,
+    /// Spearman rank correlation of the held-out error's prediction with the measured benefit.
+    pub heldout_spearman: f64,
+    /// The same for the image error.
+    pub image_spearman: f64,
+    /// Over the voxels that changed the image only: held-out.
+    pub heldout_spearman_changed: f64,
+    /// Over the voxels that changed the image only: image error.
+    pub image_spearman_changed: f64,
 }
 
 /// A precomputed representation, ready to render.
@@ -194,9 +236,8 @@ pub(super) fn run(
         let options = voxelize::Options { mode: Mode::Conservative, ..Default::default() };
         let vox = voxelize::voxelize(inputs.geometry, &grid, &options)?;
         let ctx = SamplingContext::new(inputs.scene, inputs.geometry, &vox)?;
-        let built = build_all(&ctx, inputs.geometry, config, gpu, &|m| {
-            progress(&format!("{label}: {res}³: {m}"))
-        })?;
+        let (built, candidates) =
+            build_all(&ctx, inputs, config, gpu, &|m| progress(&format!("{label}: {res}³: {m}")))?;
         drop(ctx);
         drop(vox);
 
@@ -222,6 +263,33 @@ pub(super) fn run(
                 figure.append(&mut heat_maps);
                 result.images.push((res, figure));
             }
+            if size == res && config.contribution_samples > 0 {
+                progress(&format!("{label}: {res}³ Adaptive: measured voxel contributions"));
+                let options = ContributionOptions {
+                    samples: config.contribution_samples,
+                    render: render_options(inputs, size),
+                    ..Default::default()
+                };
+                let light = inputs.scene.light();
+                let background = inputs.scene.background;
+                let c = adaptive::contribution::measure(
+                    &candidates,
+                    inputs.views,
+                    &light,
+                    background,
+                    &references,
+                    &options,
+                )?;
+                result.predictor.push(PredictorCheck {
+                    resolution: res,
+                    samples: c.voxels.len(),
+                    changed: c.changed,
+                    heldout_spearman: c.heldout_spearman,
+                    image_spearman: c.image_spearman,
+                    heldout_spearman_changed: c.heldout_spearman_changed,
+                    image_spearman_changed: c.image_spearman_changed,
+                });
+            }
         }
     }
     Ok(result)
@@ -235,11 +303,12 @@ pub(super) fn run(
 /// (a device limit) is an error.
 fn build_all(
     ctx: &SamplingContext<'_>,
-    geometry: &Geometry,
+    inputs: &SceneInputs<'_>,
     config: &FilteredConfig,
     gpu: Option<&SceneGpu<'_>>,
     progress: &dyn Fn(&str),
-) -> Result<Vec<Built>, Error> {
+) -> Result<(Vec<Built>, adaptive::Candidates), Error> {
+    let geometry = inputs.geometry;
     let opts = PrecomputeOptions { rays: config.rays, ..Default::default() };
     let mut built = Vec::new();
 
@@ -309,15 +378,25 @@ fn build_all(
 
     progress("Adaptive: candidates and held-out errors");
     let t = Instant::now();
-    let options =
-        AdaptiveOptions { rays: config.rays, heldout: config.heldout, ..Default::default() };
+    let options = AdaptiveOptions {
+        rays: config.rays,
+        heldout: config.heldout,
+        ambient: inputs.ambient,
+        vmesh: config.adaptive_vmesh,
+        ..Default::default()
+    };
     let candidates = adaptive::Candidates::build(ctx, &options)?;
     let candidates_time = t.elapsed();
-    for &threshold in &config.thresholds {
+    let selections = (config.thresholds.iter().map(|&t| (Selector::HeldOut, t)))
+        .chain(config.image_thresholds.iter().map(|&t| (Selector::Image, t)));
+    for (selector, threshold) in selections {
         let t = Instant::now();
-        let g = candidates.select(threshold)?;
+        let g = candidates.select_with(selector, threshold)?;
         built.push(Built {
-            method: format!("Adaptive τ={threshold}"),
+            method: match selector {
+                Selector::HeldOut => format!("Adaptive τ={threshold}"),
+                Selector::Image => format!("Adaptive (image) τ={threshold}"),
+            },
             record_bytes: g.record_bytes(),
             memory_bytes: g.memory_bytes(),
             precompute: candidates_time + t.elapsed(),
@@ -327,7 +406,12 @@ fn build_all(
             grid: Box::new(g),
         });
     }
-    Ok(built)
+    Ok((built, candidates))
+}
+
+/// The filtered renderer's options for the study's frames at `size`².
+fn render_options(inputs: &SceneInputs<'_>, size: u32) -> filtered::Options {
+    filtered::Options { width: size, height: size, ambient: inputs.ambient, shadows: true }
 }
 
 /// Renders one representation from every view at `size`², cold then warm, and scores it
@@ -341,8 +425,7 @@ fn render_row(
     size: u32,
     references: &[Srgb8Image],
 ) -> Result<(MethodRow, Srgb8Image), Error> {
-    let options =
-        filtered::Options { width: size, height: size, ambient: inputs.ambient, shadows: true };
+    let options = render_options(inputs, size);
     let light = inputs.scene.light();
     let (mut cold, mut warm) = (Duration::ZERO, Duration::ZERO);
     let mut metrics = Vec::new();
@@ -508,6 +591,32 @@ impl FilteredResult {
                     cells.push(Cell::Text(on));
                 }
                 table.push_row(cells)?;
+            }
+            tables.push(table);
+        }
+        if !self.predictor.is_empty() {
+            let mut table = Table::new(
+                format!("{label} Adaptive selector errors against measured voxel contributions"),
+                vec![
+                    Column::number("resolution", NumberFormat::Integer),
+                    Column::number("voxels measured", NumberFormat::Integer),
+                    Column::number("changed the image", NumberFormat::Integer),
+                    Column::number("Spearman held-out", NumberFormat::Fixed(3)),
+                    Column::number("Spearman image", NumberFormat::Fixed(3)),
+                    Column::number("held-out (changed)", NumberFormat::Fixed(3)),
+                    Column::number("image (changed)", NumberFormat::Fixed(3)),
+                ],
+            );
+            for p in &self.predictor {
+                table.push_row(vec![
+                    Cell::Number(p.resolution as f64),
+                    Cell::Number(p.samples as f64),
+                    Cell::Number(p.changed as f64),
+                    Cell::Number(p.heldout_spearman),
+                    Cell::Number(p.image_spearman),
+                    Cell::Number(p.heldout_spearman_changed),
+                    Cell::Number(p.image_spearman_changed),
+                ])?;
             }
             tables.push(table);
         }

@@ -40,6 +40,7 @@ fn bad_filtered_fields_are_named() {
         (FilteredConfig { rays: 0, ..base.clone() }, "rays"),
         (FilteredConfig { heldout: 0, ..base.clone() }, "heldout"),
         (FilteredConfig { thresholds: vec![0.1, f32::NAN], ..base.clone() }, "thresholds"),
+        (FilteredConfig { image_thresholds: vec![-1.0], ..base.clone() }, "image_thresholds"),
     ];
     for (config, field) in cases {
         let (study, got, _) = named(config.validate());

@@ -24,6 +24,9 @@ fn tiny() -> Config {
             rays: 64,
             heldout: 128,
             thresholds: vec![0.1, 1e9],
+            image_thresholds: vec![0.02],
+            contribution_samples: 8,
+            ..FilteredConfig::quick()
         }),
         volume: Some(VolumeConfig {
             preset: "smoke".into(),
@@ -69,7 +72,7 @@ fn tiny_experiment_writes_a_consistent_report() {
 
     // Every representation at 16³, rendered at 16² and 40², scored, with honest byte counts.
     let filtered = scene.filtered.as_ref().unwrap();
-    assert_eq!(filtered.rows.len(), 2 * (METHODS.len() + 2), "{:?}", filtered.rows);
+    assert_eq!(filtered.rows.len(), 2 * (METHODS.len() + 3), "{:?}", filtered.rows);
     for row in &filtered.rows {
         assert!(row.voxels > 0 && row.memory_bytes > 0, "{row:?}");
         assert!(row.bytes_per_voxel >= row.record_bytes, "{row:?}");
@@ -84,6 +87,12 @@ fn tiny_experiment_writes_a_consistent_report() {
     let loose = filtered.rows.iter().find(|r| r.method.contains("1000000000")).unwrap();
     assert_eq!(loose.mix, Some([1.0, 0.0, 0.0]));
     assert_eq!(loose.record_bytes, 12.0);
+    // The image-error selector's row and the predictor check at the one resolution.
+    assert!(filtered.rows.iter().any(|r| r.method == "Adaptive (image) τ=0.02"));
+    assert_eq!(filtered.predictor.len(), 1);
+    let check = &filtered.predictor[0];
+    assert_eq!((check.resolution, check.samples), (16, 8));
+    assert!((-1.0..=1.0).contains(&check.image_spearman), "{check:?}");
 
     let dir = std::env::temp_dir().join(format!("voxlod-report-{}", std::process::id()));
     let written = outcome.report.write(&dir).unwrap();
@@ -92,6 +101,7 @@ fn tiny_experiment_writes_a_consistent_report() {
     assert!(md.contains("The ground truth's own error"), "{md}");
     assert!(dir.join("assets/ssim-vs-memory.svg").exists());
     assert!(md.contains("filtered appearance 16^3"), "{md}");
+    assert!(md.contains("Adaptive selector errors against measured voxel contributions"), "{md}");
     for m in METHODS {
         assert!(md.contains(m), "{m} missing from the report");
     }

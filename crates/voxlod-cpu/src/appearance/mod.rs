@@ -76,10 +76,12 @@ impl<R> AppearanceGrid<R> {
         size_of::<R>() + self.specular.as_ref().map_or(0, |_| size_of::<SpecularRecord>())
     }
 
-    /// Heap bytes of the whole grid: brick map (headers, lookup, records) and specular records.
+    /// Packed bytes of the whole grid, what a renderer holds: the brick map (headers, packed
+    /// look-up, records; [`BrickMap::memory_bytes`]) and the specular records, counted from
+    /// lengths (no growth slack).
     pub fn memory_bytes(&self) -> usize {
         self.records.memory_bytes()
-            + self.specular.as_ref().map_or(0, |s| s.capacity() * size_of::<SpecularRecord>())
+            + self.specular.as_ref().map_or(0, |s| s.len() * size_of::<SpecularRecord>())
     }
 }
 

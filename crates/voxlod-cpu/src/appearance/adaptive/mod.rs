@@ -1,6 +1,7 @@
 //! Adaptive representation (beyond the HPG 2023 paper, which suggests it in its conclusion):
 //! per voxel, the cheapest of Averages (8 B), \[VJK21\] (12 B) and the virtual mesh with its
-//! opacity subgrid (136 B) whose **directional error** is at most a threshold τ; a voxel whose
+//! opacity subgrid (136 B) whose error — the held-out **directional error** (the default) or
+//! the predicted **image error** ([`Selector`]) — is at most a threshold τ; a voxel whose
 //! candidates all exceed τ keeps the one with the smallest error. One parameter dials memory
 //! against quality, and every voxel pays a 4-byte [`AdaptiveRef`] type tag.
 //!
@@ -30,6 +31,35 @@
 //! Both terms are on a [0, 1] scale per unit albedo, so τ reads as "mean absolute error in
 //! opacity plus in Lambert shading".
 //!
+//! # The image error ([`Selector::Image`])
+//!
+//! The directional error weighs every direction and every voxel alike, but the renderer does
+//! not: an opacity error shows only where what lies behind the voxel differs from the voxel's
+//! own colour, a shading error only where the voxel is seen, and a hidden voxel shows nothing.
+//! The image error is the first-order change of one pixel when only this voxel's record
+//! replaces the truth, everything else along the pixel's ray staying true. Per bin `b`
+//! (travel direction `d_b`, viewer at `−d_b`) with held-out lines:
+//!
+//! - every voxel's truth is its held-out opacity `α_b` and the mean radiance `L_b` of the bin's
+//!   surface hits toward their viewers under the scene's light at the voxel centre, with the
+//!   renderer's ambient term and the voxel's light visibility `V`: the transmittance of a walk
+//!   from its centre toward the light through the other voxels' true opacities (skipping those
+//!   within 1.5 voxel sizes, as the renderer's shadow rays do). Bins with fewer than
+//!   [`MIN_SURFACE_HITS`] hits take the Averages record's radiance as their truth;
+//! - a walk from the voxel toward the viewer composites the voxels in front, back to front,
+//!   into the colour `F` they add and their transmittance `T_f`; a walk along `d_b`
+//!   composites those behind and then the scene's background into `B`;
+//! - the pixel is `F + T_f·(α_b L_b + (1 − α_b)·B)` in truth and
+//!   `F + T_f·(α̂_b L̂_b + (1 − α̂_b)·B)` with the record (`α̂_b` as above, `L̂_b` the record's
+//!   radiance toward `−d_b` with visibility `V`); its error is the difference of their sRGB
+//!   encodings (each channel clamped to [0, 1]), the scale the MSE and SSIM are computed on.
+//!
+//! `E_img` is the root mean square of that difference over the bins with lines and the
+//! colour channels, so τ reads as "RMS sRGB error of the pixels this voxel covers". Walks stop
+//! when the transmittance falls below 0.001 (a voxel hidden that well has error 0). What it
+//! leaves out: the other voxels' own errors (they are taken as true), the views (every bin
+//! weighs the same), and a record's effect on the shadows of others.
+//!
 //! # Mixed grids along a ray
 //!
 //! Each voxel applies its own update to the running transmittance `T` (design note §4(e)):
@@ -54,36 +84,50 @@ use super::{
     virtual_mesh,
 };
 use crate::{Error, Result};
+use heldout::HeldOut;
+use image::VoxelBins;
 
-/// Default number of held-out rays per voxel.
-pub const DEFAULT_HELDOUT: u32 = 512;
+pub mod contribution;
+mod heldout;
+mod image;
 
-/// Fewest case-(a) hits a direction bin needs before its shading error counts.
-pub const MIN_SURFACE_HITS: u32 = 4;
+pub use heldout::{BINS, DEFAULT_HELDOUT, LIGHTS, MIN_SURFACE_HITS, directional_error};
 
-const S: f32 = 0.577_350_3; // 1/√3
+/// Which per-voxel error the selector compares with the threshold τ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Selector {
+    /// The held-out directional error (module docs, "The directional error").
+    #[default]
+    HeldOut,
+    /// The predicted image error (module docs, "The image error").
+    Image,
+}
 
-/// The direction bins of the error: the 6 axes and the 8 diagonals.
-pub const BINS: [Vec3; 14] = [
-    Vec3::X,
-    Vec3::NEG_X,
-    Vec3::Y,
-    Vec3::NEG_Y,
-    Vec3::Z,
-    Vec3::NEG_Z,
-    Vec3::new(S, S, S),
-    Vec3::new(-S, S, S),
-    Vec3::new(S, -S, S),
-    Vec3::new(-S, -S, S),
-    Vec3::new(S, S, -S),
-    Vec3::new(-S, S, -S),
-    Vec3::new(S, -S, -S),
-    Vec3::new(-S, -S, -S),
-];
+impl Selector {
+    /// Its name in reports and on the command line: `heldout` or `image`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Selector::HeldOut => "heldout",
+            Selector::Image => "image",
+        }
+    }
+}
 
-/// The light directions of the shading error: the corners of a tetrahedron.
-pub const LIGHTS: [Vec3; 4] =
-    [Vec3::new(S, S, S), Vec3::new(S, -S, -S), Vec3::new(-S, S, -S), Vec3::new(-S, -S, S)];
+impl std::str::FromStr for Selector {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "heldout" => Ok(Selector::HeldOut),
+            "image" => Ok(Selector::Image),
+            _ => Err(Error::InvalidParameter {
+                name: "selector",
+                value: s.into(),
+                reason: "expected `heldout` or `image`".into(),
+            }),
+        }
+    }
+}
 
 /// Settings of the Adaptive precompute.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -96,6 +140,12 @@ pub struct AdaptiveOptions {
     pub seed: u32,
     /// Directional-opacity rule and shading samples of the virtual-mesh candidate.
     pub vmesh: VirtualMeshParams,
+    /// The error [`Candidates::select`] compares with τ (both are always computed;
+    /// [`Candidates::select_with`] picks either).
+    pub selector: Selector,
+    /// Ambient term the image error shades with (the renderer's
+    /// [`crate::render::filtered::Options::ambient`]).
+    pub ambient: Vec3,
 }
 
 impl Default for AdaptiveOptions {
@@ -106,122 +156,10 @@ impl Default for AdaptiveOptions {
             heldout: DEFAULT_HELDOUT,
             seed: p.seed,
             vmesh: VirtualMeshParams::default(),
+            selector: Selector::default(),
+            ambient: Vec3::ZERO,
         }
     }
-}
-
-fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
-
-/// Per-bin statistics of held-out lines: counts, occlusions, Lambert sums.
-struct HeldOut<'a> {
-    samples: &'a VoxelSamples,
-    /// Bin of each ray.
-    bin: Vec<u8>,
-    rays: [u32; 14],
-    occluded: [u32; 14],
-    hits: [u32; 14],
-    lambert: [[f32; 4]; 14],
-}
-
-impl<'a> HeldOut<'a> {
-    fn new(samples: &'a VoxelSamples) -> Self {
-        let mut h = HeldOut {
-            samples,
-            bin: Vec::with_capacity(samples.rays.len()),
-            rays: [0; 14],
-            occluded: [0; 14],
-            hits: [0; 14],
-            lambert: [[0.0; 4]; 14],
-        };
-        for r in &samples.rays {
-            let b = nearest_bin(r.dir);
-            h.bin.push(b as u8);
-            h.rays[b] += 1;
-            h.occluded[b] += u32::from(r.occluded);
-            if let Some(s) = &r.surface {
-                h.hits[b] += 1;
-                let a = luminance(s.albedo);
-                for (j, l) in LIGHTS.iter().enumerate() {
-                    h.lambert[b][j] += a * s.normal.dot(*l).max(0.0);
-                }
-            }
-        }
-        h
-    }
-
-    /// The directional error of `record` (module docs).
-    fn error<R: RecordAppearance>(
-        &self,
-        record: &R,
-        params: R::Params,
-        specular: Option<&SpecularRecord>,
-    ) -> f32 {
-        let mut opacity_sum = 0.0;
-        let mut opacity_bins = 0u32;
-        let mut shading_sum = 0.0;
-        let mut shading_terms = 0u32;
-        let mut predicted = [0.0f32; 14];
-        let mut ops = [Opacity::Alpha(0.0); 14];
-        for b in 0..14 {
-            if self.rays[b] > 0 {
-                ops[b] = record.opacity(params, BINS[b]);
-            }
-        }
-        for (r, &b) in self.samples.rays.iter().zip(&self.bin) {
-            predicted[b as usize] += 1.0 - ops[b as usize].apply(1.0, r.chord);
-        }
-        for b in 0..14 {
-            if self.rays[b] == 0 {
-                continue;
-            }
-            let n = self.rays[b] as f32;
-            opacity_sum += (predicted[b] / n - self.occluded[b] as f32 / n).abs();
-            opacity_bins += 1;
-            if self.hits[b] < MIN_SURFACE_HITS {
-                continue;
-            }
-            let to_viewer = -BINS[b];
-            for (j, l) in LIGHTS.iter().enumerate() {
-                let light = LightSample {
-                    to_light: *l,
-                    distance: f32::INFINITY,
-                    irradiance: Vec3::splat(std::f32::consts::PI),
-                };
-                let c = record.radiance(params, specular, to_viewer, &light, 1.0, Vec3::ZERO);
-                shading_sum += (luminance(c) - self.lambert[b][j] / self.hits[b] as f32).abs();
-                shading_terms += 1;
-            }
-        }
-        let o = if opacity_bins > 0 { opacity_sum / opacity_bins as f32 } else { 0.0 };
-        let s = if shading_terms > 0 { shading_sum / shading_terms as f32 } else { 0.0 };
-        o + s
-    }
-}
-
-fn nearest_bin(d: Vec3) -> usize {
-    let mut best = 0;
-    let mut best_dot = f32::NEG_INFINITY;
-    for (i, b) in BINS.iter().enumerate() {
-        let dot = b.dot(d);
-        if dot > best_dot {
-            best_dot = dot;
-            best = i;
-        }
-    }
-    best
-}
-
-/// The directional error of `record` on held-out samples of its voxel (module docs), exposed
-/// for tests and reports.
-pub fn directional_error<R: RecordAppearance>(
-    record: &R,
-    params: R::Params,
-    specular: Option<&SpecularRecord>,
-    heldout: &VoxelSamples,
-) -> f32 {
-    HeldOut::new(heldout).error(record, params, specular)
 }
 
 /// One voxel's three candidate records and their errors.
@@ -233,21 +171,46 @@ struct Candidate {
     vmesh: VirtualMeshRecord,
     specular: Option<SpecularRecord>,
     errors: [f32; 3],
+    image_errors: [f32; 3],
 }
 
-/// All three candidates of every voxel with their held-out errors: built once, then
+impl Candidate {
+    /// Radiance of candidate `k` (Averages, \[VJK21\], virtual mesh) toward `to_viewer`.
+    fn radiance(
+        &self,
+        k: usize,
+        rule: VirtualMeshParams,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let s = self.specular.as_ref();
+        match k {
+            0 => self.average.radiance((), s, to_viewer, light, visibility, ambient),
+            1 => self.sggx.radiance((), s, to_viewer, light, visibility, ambient),
+            _ => self.vmesh.radiance(rule, s, to_viewer, light, visibility, ambient),
+        }
+    }
+}
+
+/// All three candidates of every voxel with their held-out and image errors: built once, then
 /// [`Candidates::select`]ed at any number of thresholds.
 #[derive(Clone, Debug)]
 pub struct Candidates {
     grid: GridSpec,
     rule: VirtualMeshParams,
+    selector: Selector,
     voxels: Vec<Candidate>,
     specular: bool,
 }
 
+const KINDS: [Kind; 3] = [Kind::Average, Kind::Sggx, Kind::VirtualMesh];
+
 impl Candidates {
-    /// Fits the three candidates of every voxel (from the same `rays` samples) and scores each
-    /// on `heldout` further rays. Parallel over voxels; deterministic.
+    /// Fits the three candidates of every voxel (from the same `rays` samples), scores each on
+    /// `heldout` further rays, then predicts each one's image error (module docs). Parallel
+    /// over voxels; deterministic.
     pub fn build(ctx: &SamplingContext<'_>, options: &AdaptiveOptions) -> Result<Self> {
         if options.rays == 0 || options.heldout == 0 {
             return Err(Error::InvalidParameter {
@@ -256,9 +219,12 @@ impl Candidates {
                 reason: "the fit and the error estimate each need at least one ray".into(),
             });
         }
+        crate::render::check_colour("ambient", options.ambient)?;
         let specular = ctx.has_specular();
         let rule = options.vmesh;
-        let voxels: Vec<Candidate> = (0..ctx.voxel_count())
+        let grid = *ctx.grid();
+        let light = ctx.scene().light().validated()?;
+        let fitted: Vec<(Candidate, UVec3, VoxelBins)> = (0..ctx.voxel_count())
             .into_par_iter()
             .map_init(
                 || (VoxelSamples::default(), VoxelSamples::default()),
@@ -273,24 +239,43 @@ impl Candidates {
                     let spec = specular.then(|| precompute::specular_record(fit));
                     ctx.sample_voxel_seeded(i, options.seed, options.rays, options.heldout, held);
                     let h = HeldOut::new(held);
-                    let errors = [
-                        h.error(&average, (), spec.as_ref()),
-                        h.error(&sggx, (), spec.as_ref()),
-                        h.error(&vmesh, rule, spec.as_ref()),
+                    let alpha_hat = [
+                        h.predicted_opacity(&average, ()),
+                        h.predicted_opacity(&sggx, ()),
+                        h.predicted_opacity(&vmesh, rule),
                     ];
-                    Some(Candidate {
-                        code: morton::encode(ctx.coord(i)),
+                    let errors = [
+                        h.error(&average, (), spec.as_ref(), &alpha_hat[0]),
+                        h.error(&sggx, (), spec.as_ref(), &alpha_hat[1]),
+                        h.error(&vmesh, rule, spec.as_ref(), &alpha_hat[2]),
+                    ];
+                    let c = ctx.coord(i);
+                    let l = image::light_at(&light, &grid, c);
+                    let bins = VoxelBins::new(&h, &l, options.ambient, alpha_hat);
+                    let candidate = Candidate {
+                        code: morton::encode(c),
                         average,
                         sggx,
                         vmesh,
                         specular: spec,
                         errors,
-                    })
+                        image_errors: [0.0; 3],
+                    };
+                    Some((candidate, c, bins))
                 },
             )
             .flatten()
             .collect();
-        Ok(Self { grid: *ctx.grid(), rule, voxels, specular })
+        let mut voxels = Vec::with_capacity(fitted.len());
+        let mut coords = Vec::with_capacity(fitted.len());
+        let mut bins = Vec::with_capacity(fitted.len());
+        for (v, c, b) in fitted {
+            voxels.push(v);
+            coords.push(c);
+            bins.push(b);
+        }
+        image_errors(&mut voxels, &coords, &bins, &grid, &light, ctx.scene().background, options)?;
+        Ok(Self { grid, rule, selector: options.selector, voxels, specular })
     }
 
     /// Voxels with candidates.
@@ -303,16 +288,31 @@ impl Candidates {
         self.voxels.is_empty()
     }
 
+    /// The grid.
+    pub fn grid(&self) -> &GridSpec {
+        &self.grid
+    }
+
+    /// The selector [`Candidates::select`] uses.
+    pub fn selector(&self) -> Selector {
+        self.selector
+    }
+
     /// Per voxel (brick-map Morton order), the held-out error of Averages, \[VJK21\] and the
     /// virtual mesh.
     pub fn errors(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
         self.voxels.iter().map(|v| v.errors)
     }
 
+    /// Per voxel (brick-map Morton order), the predicted image error of Averages, \[VJK21\]
+    /// and the virtual mesh.
+    pub fn image_errors(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
+        self.voxels.iter().map(|v| v.image_errors)
+    }
+
     /// The kind chosen for a voxel with `errors` at `threshold`: the cheapest at most
     /// `threshold`, else the one with the least error (the cheaper on ties).
     pub fn choose(errors: [f32; 3], threshold: f32) -> Kind {
-        const KINDS: [Kind; 3] = [Kind::Average, Kind::Sggx, Kind::VirtualMesh];
         if let Some(k) = (0..3).find(|&k| errors[k] <= threshold) {
             return KINDS[k];
         }
@@ -325,8 +325,13 @@ impl Candidates {
         KINDS[best]
     }
 
-    /// The mixed grid at `threshold`.
+    /// The mixed grid at `threshold`, by the selector of the build options.
     pub fn select(&self, threshold: f32) -> Result<AdaptiveGrid> {
+        self.select_with(self.selector, threshold)
+    }
+
+    /// The mixed grid at `threshold` by `selector`'s error.
+    pub fn select_with(&self, selector: Selector, threshold: f32) -> Result<AdaptiveGrid> {
         if !(threshold.is_finite() && threshold >= 0.0) {
             return Err(Error::InvalidParameter {
                 name: "threshold",
@@ -334,18 +339,48 @@ impl Candidates {
                 reason: "must be finite and non-negative".into(),
             });
         }
+        self.select_kinds_by(|v| {
+            let errors = match selector {
+                Selector::HeldOut => v.errors,
+                Selector::Image => v.image_errors,
+            };
+            Self::choose(errors, threshold)
+        })
+    }
+
+    /// The grid whose voxel `i` (brick-map Morton order) uses `kinds[i]`. Errors when the
+    /// count differs from [`Candidates::len`].
+    pub fn select_kinds(&self, kinds: &[Kind]) -> Result<AdaptiveGrid> {
+        if kinds.len() != self.voxels.len() {
+            return Err(Error::InvalidParameter {
+                name: "kinds",
+                value: kinds.len().to_string(),
+                reason: format!("one kind per voxel: {}", self.voxels.len()),
+            });
+        }
+        let mut i = 0;
+        self.select_kinds_by(|_| {
+            i += 1;
+            kinds[i - 1]
+        })
+    }
+
+    /// The grid whose every voxel uses the kind `choose` returns for it, every array built at
+    /// its exact size.
+    fn select_kinds_by(&self, mut choose: impl FnMut(&Candidate) -> Kind) -> Result<AdaptiveGrid> {
+        let kinds: Vec<Kind> = self.voxels.iter().map(&mut choose).collect();
+        let count = |k: Kind| kinds.iter().filter(|&&x| x == k).count();
         let mut g = AdaptiveGrid {
             grid: self.grid,
             rule: self.rule,
             refs: BrickMap::new(self.grid.dims),
-            averages: Vec::new(),
-            sggx: Vec::new(),
-            vmesh: Vec::new(),
-            specular: self.specular.then(Vec::new),
+            averages: Vec::with_capacity(count(Kind::Average)),
+            sggx: Vec::with_capacity(count(Kind::Sggx)),
+            vmesh: Vec::with_capacity(count(Kind::VirtualMesh)),
+            specular: self.specular.then(|| Vec::with_capacity(self.voxels.len())),
         };
         let mut refs = Vec::with_capacity(self.voxels.len());
-        for v in &self.voxels {
-            let kind = Self::choose(v.errors, threshold);
+        for (v, &kind) in self.voxels.iter().zip(&kinds) {
             let index = match kind {
                 Kind::Average => push(&mut g.averages, v.average),
                 Kind::Sggx => push(&mut g.sggx, v.sggx),
@@ -368,6 +403,58 @@ impl Candidates {
         g.refs = BrickMap::from_morton_sorted(self.grid.dims, refs)?;
         Ok(g)
     }
+}
+
+/// Fills every candidate's image error: light visibilities, the true radiance of every voxel
+/// per bin, then the composited error per voxel (module docs, "The image error").
+fn image_errors(
+    voxels: &mut [Candidate],
+    coords: &[UVec3],
+    bins: &[VoxelBins],
+    grid: &GridSpec,
+    light: &voxlod_scene::Light,
+    background: Vec3,
+    options: &AdaptiveOptions,
+) -> Result<()> {
+    crate::render::check_colour("background", background)?;
+    let index = BrickMap::from_morton_sorted(grid.dims, voxels.iter().map(|v| (v.code, ())))?;
+    let vis = image::visibilities(&index, grid, coords, bins, light);
+    let rule = options.vmesh;
+    // Per voxel and bin: the record radiance of each candidate, and the truth (the mean of
+    // the bin's hits where it has enough, else the Averages record's).
+    let radiance: Vec<[[Vec3; 14]; 3]> = (0..voxels.len())
+        .into_par_iter()
+        .map(|i| {
+            let l = image::light_at(light, grid, coords[i]);
+            let mut r = [[Vec3::ZERO; 14]; 3];
+            for (k, rk) in r.iter_mut().enumerate() {
+                for (b, d) in BINS.iter().enumerate() {
+                    rk[b] = voxels[i].radiance(k, rule, -*d, &l, vis[i], options.ambient);
+                }
+            }
+            r
+        })
+        .collect();
+    let truth: Vec<[Vec3; 14]> = (0..voxels.len())
+        .into_par_iter()
+        .map(|i| {
+            let v = &bins[i];
+            std::array::from_fn(|b| {
+                if v.shaded & (1 << b) != 0 {
+                    v.radiance[0][b] + vis[i] * (v.radiance[1][b] - v.radiance[0][b])
+                } else {
+                    radiance[i][0][b]
+                }
+            })
+        })
+        .collect();
+    let scene = image::Compositor { index: &index, grid, coords, bins, truth: &truth, background };
+    let errors: Vec<[f32; 3]> =
+        (0..voxels.len()).into_par_iter().map(|i| scene.errors(i, &radiance[i])).collect();
+    for (v, e) in voxels.iter_mut().zip(errors) {
+        v.image_errors = e;
+    }
+    Ok(())
 }
 
 fn push<T>(v: &mut Vec<T>, x: T) -> usize {
@@ -406,14 +493,15 @@ impl AdaptiveGrid {
         (size_of::<AdaptiveRef>() + specular) as f64 + records as f64 / n
     }
 
-    /// Heap bytes: the tag brick map (headers, lookup, tags), the record arrays and the
-    /// specular records.
+    /// Packed bytes, what a renderer holds: the tag brick map (headers, packed look-up, tags;
+    /// [`BrickMap::memory_bytes`]), the record arrays and the specular records, counted from
+    /// lengths. The arrays are built at their exact size, so this is also their heap size.
     pub fn memory_bytes(&self) -> usize {
         self.refs.memory_bytes()
-            + self.averages.capacity() * size_of::<AverageRecord>()
-            + self.sggx.capacity() * size_of::<SggxRecord>()
-            + self.vmesh.capacity() * size_of::<VirtualMeshRecord>()
-            + self.specular.as_ref().map_or(0, |s| s.capacity() * size_of::<SpecularRecord>())
+            + self.averages.len() * size_of::<AverageRecord>()
+            + self.sggx.len() * size_of::<SggxRecord>()
+            + self.vmesh.len() * size_of::<VirtualMeshRecord>()
+            + self.specular.as_ref().map_or(0, |s| s.len() * size_of::<SpecularRecord>())
     }
 
     /// The tag of voxel `index`.
@@ -514,73 +602,4 @@ impl Appearance for AdaptiveGrid {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
-
-    #[test]
-    fn the_cheapest_kind_under_the_threshold_wins_else_the_least_error() {
-        assert_eq!(Candidates::choose([0.05, 0.01, 0.0], 0.1), Kind::Average);
-        assert_eq!(Candidates::choose([0.2, 0.05, 0.0], 0.1), Kind::Sggx);
-        assert_eq!(Candidates::choose([0.2, 0.15, 0.1], 0.1), Kind::VirtualMesh);
-        assert_eq!(Candidates::choose([0.3, 0.2, 0.25], 0.1), Kind::Sggx);
-        // Ties without any kind under the threshold go to the cheaper kind.
-        assert_eq!(Candidates::choose([0.3, 0.3, 0.3], 0.1), Kind::Average);
-    }
-
-    /// Held-out lines in every bin not parallel to the plane z = ½, all hitting its white
-    /// two-sided surface (normal ±z toward the line).
-    fn opaque_plane(count: usize) -> VoxelSamples {
-        let bins: Vec<Vec3> = BINS.iter().copied().filter(|b| b.z != 0.0).collect();
-        let rays = (0..count)
-            .map(|i| {
-                let dir = bins[i % bins.len()];
-                let normal = if dir.z < 0.0 { Vec3::Z } else { -Vec3::Z };
-                RaySample {
-                    dir,
-                    entry: Vec3::splat(0.5),
-                    chord: 1.0,
-                    occluded: true,
-                    surface: Some(SurfaceSample {
-                        point: Vec3::splat(0.5),
-                        normal,
-                        albedo: Vec3::ONE,
-                        specular: 0.0,
-                        shininess: 1.0,
-                    }),
-                }
-            })
-            .collect();
-        VoxelSamples { rays }
-    }
-
-    #[test]
-    fn a_matching_record_scores_lower_than_a_wrong_one() {
-        let held = opaque_plane(10 * 8);
-        let good = AverageRecord::new(Vec3::ONE, Vec3::Z, 1.0);
-        let transparent = AverageRecord::new(Vec3::ONE, Vec3::Z, 0.0);
-        let dark = AverageRecord::new(Vec3::splat(0.2), Vec3::Z, 1.0);
-        let e_good = directional_error(&good, (), None, &held);
-        let e_transparent = directional_error(&transparent, (), None, &held);
-        let e_dark = directional_error(&dark, (), None, &held);
-        // The opacity term vanishes for the opaque record; the Averages normal is flipped
-        // toward each viewer like the samples', so shading matches up to quantization.
-        assert!(e_good < 0.02, "{e_good}");
-        assert!((e_transparent - e_good - 1.0).abs() < 0.02, "{e_transparent} vs {e_good}");
-        assert!(e_dark > e_good + 0.1, "{e_dark} vs {e_good}");
-        for e in [e_good, e_transparent, e_dark] {
-            assert!(e.is_finite() && e >= 0.0);
-        }
-    }
-
-    #[test]
-    fn every_held_out_line_falls_in_its_nearest_bin() {
-        for (i, b) in BINS.iter().enumerate() {
-            assert_eq!(nearest_bin(*b), i);
-            assert_eq!(nearest_bin(*b * 3.0 + Vec3::splat(1e-3)), i);
-        }
-        for l in LIGHTS {
-            assert!((l.length() - 1.0).abs() < 1e-6);
-        }
-    }
-}
+mod tests;
