@@ -24,6 +24,7 @@ fn tiny() -> Config {
             rays: 64,
             heldout: 128,
             thresholds: vec![0.1, 1e9],
+            choices: Default::default(),
         }),
         volume: Some(VolumeConfig {
             preset: "smoke".into(),

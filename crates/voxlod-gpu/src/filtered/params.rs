@@ -99,7 +99,7 @@ pub(super) fn frame_params(
     background: Vec3,
     options: &Options,
 ) -> GpuFilteredParams {
-    let Options { width, height, ambient, shadows } = *options;
+    let Options { width, height, ambient, shadows, .. } = *options;
     let frame = camera.frame(width, height);
     let grid = app.grid;
     let eye_grid = ((camera.eye.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();

@@ -103,7 +103,7 @@ fn voxel_count(kind: RecordKind) -> usize {
 /// The baseline renderer's CPU image, on the current rayon pool.
 fn cpu_baseline(camera: &Camera, light: &Light, bg: Vec3, o: &Options) -> Result<Image, String> {
     let f = fixture();
-    let Options { width, height, ambient, shadows } = *o;
+    let Options { width, height, ambient, shadows, .. } = *o;
     let options = baseline::Options { width, height, ambient, shadows };
     baseline::render(&f.grid, &f.baseline, camera, light, bg, &options).map_err(|e| e.to_string())
 }
@@ -193,7 +193,8 @@ pub fn cases() -> Vec<(&'static str, Camera, Light, Options)> {
         irradiance: Vec3::splat(3.0),
     };
     let point = Light::Point { position: hi + (hi - lo) * 0.3, intensity: Vec3::splat(2.0) };
-    let base = Options { width: SIZE, height: SIZE, ambient: Vec3::splat(0.05), shadows: true };
+    let base =
+        Options { width: SIZE, height: SIZE, ambient: Vec3::splat(0.05), ..Options::default() };
     vec![
         ("filtered-sun-shadows", camera, sun, base),
         ("filtered-sun-no-shadows", camera, sun, Options { shadows: false, ..base }),
@@ -328,7 +329,13 @@ fn property(backend: &Executor, kind: RecordKind) -> Result<Measure, String> {
         let camera = Camera::framing(dir, (lo + hi) * 0.5, radius * zoom, fov);
         let light =
             Light::Directional { to_light: to_light.normalize(), irradiance: Vec3::splat(2.0) };
-        let options = Options { width: 32, height: 32, ambient: Vec3::splat(0.05), shadows };
+        let options = Options {
+            width: 32,
+            height: 32,
+            ambient: Vec3::splat(0.05),
+            shadows,
+            ..Default::default()
+        };
         let expected = cpu(kind, &camera, &light, bg, &options).map_err(TestCaseError::fail)?;
         let m = match (&kernel, &uploaded) {
             (Some(k), Some(up)) => {

@@ -331,7 +331,13 @@ fn property(backend: &Executor, grids: &[Grid]) -> Result<Measure, String> {
         let camera = Camera::framing(dir, (lo + hi) * 0.5, radius * zoom, fov);
         let light =
             Light::Directional { to_light: to_light.normalize(), irradiance: Vec3::splat(2.0) };
-        let options = Options { width: 32, height: 32, ambient: Vec3::splat(0.05), shadows };
+        let options = Options {
+            width: 32,
+            height: 32,
+            ambient: Vec3::splat(0.05),
+            shadows,
+            ..Default::default()
+        };
         let grid = grids[g];
         let expected = grid.cpu(&camera, &light, bg, &options).map_err(TestCaseError::fail)?;
         let (m, actual) = match &kernel {

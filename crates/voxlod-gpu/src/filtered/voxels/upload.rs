@@ -4,7 +4,9 @@
 
 use voxlod_cpu::appearance::adaptive::AdaptiveGrid;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
+use voxlod_cpu::appearance::virtual_mesh::{
+    FaceSampling, ShadingFallback, VirtualMeshGrid, VirtualMeshParams,
+};
 use voxlod_cpu::appearance::{AppearanceGrid, record_material};
 use voxlod_cpu::render::filtered::FrameCache;
 use voxlod_format::records::{AdaptiveRef, Kind};
@@ -18,8 +20,22 @@ use super::{
 use crate::{Error, Result};
 
 /// `Params.vmesh` words for `p` (the voxel count is filled in by the upload), or an error for
-/// a sample count the kernel does not take.
+/// a sample count the kernel does not take, or for a choice it has no code for (the authors'
+/// directional-opacity rule, random face sampling, the unshaded fallback:
+/// [`Error::Unsupported`] naming the parameter).
 fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
+    if p.sampling != FaceSampling::Stratified {
+        return Err(Error::Unsupported {
+            what: "VirtualMeshParams::sampling other than FaceSampling::Stratified (the \
+                   authors' random face samples) in the GPU filtered renderer",
+        });
+    }
+    if p.fallback != ShadingFallback::AllStoredNormals {
+        return Err(Error::Unsupported {
+            what: "VirtualMeshParams::fallback other than ShadingFallback::AllStoredNormals \
+                   (the authors' unshaded fallback) in the GPU filtered renderer",
+        });
+    }
     if p.samples_per_face > MAX_SAMPLES_PER_FACE {
         return Err(Error::TooLarge {
             what: "VirtualMeshParams::samples_per_face on the GPU (shading samples per face)",
@@ -30,6 +46,12 @@ fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
     let rule = match p.rule {
         DirectionalRule::Lines => 0,
         DirectionalRule::Circles => 1,
+        DirectionalRule::Authors => {
+            return Err(Error::Unsupported {
+                what: "VirtualMeshParams::rule = DirectionalRule::Authors (the authors' \
+                       directional opacity) in the GPU filtered renderer",
+            });
+        }
     };
     Ok([rule, p.samples_per_face, u32::from(p.projected_area), 0])
 }
