@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use voxlod_cpu::appearance::AuthorsChoices;
 use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
-use voxlod_cpu::appearance::averages::{AveragesGrid, AveragesNormal};
+use voxlod_cpu::appearance::averages::AveragesGrid;
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::precompute;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
@@ -302,18 +302,17 @@ fn build_all(
         None => (precompute(ctx, &opts, averages::fit)?, None),
     };
     let precompute_time = t.elapsed();
-    let flip = choices.averages_normal == AveragesNormal::TowardViewer;
-    let refused =
-        gpu_refusal(choices, false).or((!flip).then_some("the Averages normal as stored"));
-    let (gpu_records, cpu_reason) = upload_or_cpu(gpu, refused, |k| k.upload_averages(&g))?;
+    let g = AveragesGrid { grid: g, normal: choices.averages_normal };
+    let (gpu_records, cpu_reason) =
+        upload_or_cpu(gpu, gpu_refusal(choices, false), |k| k.upload_averages_grid(&g))?;
     built.push(Built {
         method: "Averages".into(),
-        record_bytes: g.record_bytes() as f64,
-        memory_bytes: g.memory_bytes(),
+        record_bytes: g.grid.record_bytes() as f64,
+        memory_bytes: g.grid.memory_bytes(),
         precompute: precompute_time,
         precompute_gpu,
         gpu: gpu_records,
-        grid: Box::new(AveragesGrid { grid: g, normal: choices.averages_normal }),
+        grid: Box::new(g),
         mix: None,
         cpu_reason,
     });

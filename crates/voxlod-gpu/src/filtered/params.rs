@@ -34,7 +34,7 @@ pub struct GpuFilteredParams {
     pub light_b: [f32; 4],
     /// Grid origin (`f32`); `w` = voxel size.
     pub grid: [f32; 4],
-    /// Grid dimensions; `w` = flags (1: shadows, 2: point light).
+    /// Grid dimensions; `w` = flags (1: shadows, 2: point light, 4: Averages normal as stored).
     pub dims: [u32; 4],
     /// Width, height, the DDA step bound, 0.
     pub size: [u32; 4],
@@ -118,7 +118,13 @@ pub(super) fn frame_params(
         light_a: la.extend(0.0).to_array(),
         light_b: lb.extend(0.0).to_array(),
         grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
-        dims: dims.extend(u32::from(shadows) | if point { 2 } else { 0 }).to_array(),
+        dims: dims
+            .extend(
+                u32::from(shadows)
+                    | if point { 2 } else { 0 }
+                    | if app.averages_as_stored { 4 } else { 0 },
+            )
+            .to_array(),
         size: [width, height, steps, app.kind as u32],
         brick_dims: brick_dims.extend(0).to_array(),
         vmesh: app.voxels.as_ref().map_or([0; 4], |v| v.params),
