@@ -41,7 +41,8 @@ pub struct GpuFilteredParams {
     /// Bricks per axis, 0.
     pub brick_dims: [u32; 4],
     /// Virtual-mesh and Adaptive grids ([`voxels`](super::voxels)): directional-opacity rule (0
-    /// Lines, 1 Circles), shading samples per distribution face, projected-area scaling (0/1), and
+    /// Lines, 1 Circles), shading samples per distribution face, flags (1 projected-area scaling,
+    /// 2 the unshaded fallback), and
     /// the number of voxels with a record. Zero for the other kinds.
     pub vmesh: [u32; 4],
 }

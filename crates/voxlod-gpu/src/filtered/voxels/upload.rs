@@ -21,19 +21,13 @@ use crate::{Error, Result};
 
 /// `Params.vmesh` words for `p` (the voxel count is filled in by the upload), or an error for
 /// a sample count the kernel does not take, or for a choice it has no code for (the authors'
-/// directional-opacity rule, random face sampling, the unshaded fallback:
-/// [`Error::Unsupported`] naming the parameter).
+/// directional-opacity rule, random face sampling: [`Error::Unsupported`] naming the
+/// parameter). The third word holds flags: 1 projected-area scaling, 2 the unshaded fallback.
 fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
     if p.sampling != FaceSampling::Stratified {
         return Err(Error::Unsupported {
             what: "VirtualMeshParams::sampling other than FaceSampling::Stratified (the \
                    authors' random face samples) in the GPU filtered renderer",
-        });
-    }
-    if p.fallback != ShadingFallback::AllStoredNormals {
-        return Err(Error::Unsupported {
-            what: "VirtualMeshParams::fallback other than ShadingFallback::AllStoredNormals \
-                   (the authors' unshaded fallback) in the GPU filtered renderer",
         });
     }
     if p.samples_per_face > MAX_SAMPLES_PER_FACE {
@@ -53,7 +47,9 @@ fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
             });
         }
     };
-    Ok([rule, p.samples_per_face, u32::from(p.projected_area), 0])
+    let unshaded = p.fallback == ShadingFallback::Unshaded;
+    let flags = u32::from(p.projected_area) | u32::from(unshaded) << 1;
+    Ok([rule, p.samples_per_face, flags, 0])
 }
 
 fn invalid(name: &'static str, value: String, reason: String) -> Error {
