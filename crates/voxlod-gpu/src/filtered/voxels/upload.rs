@@ -196,4 +196,18 @@ mod tests {
         };
         assert_eq!(vmesh_words(p).unwrap(), [1, 16, 1, 0]);
     }
+
+    /// The authors' choices: the unshaded fallback is flag 2; their opacity rule and random
+    /// face samples have no kernel and are refused by name.
+    #[test]
+    fn authors_choices_are_flags_or_refused_by_name() {
+        let p = VirtualMeshParams { fallback: ShadingFallback::Unshaded, ..Default::default() };
+        assert_eq!(vmesh_words(p).unwrap(), [0, 16, 2, 0]);
+        let p = VirtualMeshParams { rule: DirectionalRule::Authors, ..Default::default() };
+        let e = vmesh_words(p).unwrap_err();
+        assert!(matches!(e, Error::Unsupported { what } if what.contains("rule")), "{e}");
+        let p = VirtualMeshParams { sampling: FaceSampling::authors(1), ..Default::default() };
+        let e = vmesh_words(p).unwrap_err();
+        assert!(matches!(e, Error::Unsupported { what } if what.contains("sampling")), "{e}");
+    }
 }
