@@ -9,19 +9,21 @@
 
 use std::time::{Duration, Instant};
 
+use voxlod_cpu::appearance::AuthorsChoices;
 use voxlod_cpu::appearance::adaptive::contribution::ContributionOptions;
 use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions, Selector};
+use voxlod_cpu::appearance::averages::AveragesGrid;
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
-use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
+use voxlod_cpu::appearance::precompute::precompute;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
 use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
 use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
-use voxlod_cpu::render::filtered::{self, FrameCache};
+use voxlod_cpu::render::filtered::{self, FrameCache, PixelPattern, VjkChord};
 use voxlod_cpu::voxelize::{self, Mode};
 use voxlod_eval::report::{Cell, Column, LabeledImage, NumberFormat, Plot, Series, Table};
 use voxlod_eval::{compare, error_heatmap};
 use voxlod_format::GridSpec;
-use voxlod_gpu::filtered::GpuRecords;
+use voxlod_gpu::filtered::{FilteredKernel, GpuRecords};
 use voxlod_scene::{Camera, Geometry, Scene, Srgb8Image};
 
 use crate::Error;
@@ -52,6 +54,10 @@ pub struct FilteredConfig {
     pub contribution_samples: usize,
     /// Directional-opacity rule and shading samples of Adaptive's virtual-mesh candidate.
     pub adaptive_vmesh: VirtualMeshParams,
+    /// Where the pipeline follows the authors' code instead of ours, and the seeds of the
+    /// sampling lines and pixel pattern (default: ours, seeds 0). A choice the GPU kernel has
+    /// no code for renders its rows on the CPU, and the row's backend says so.
+    pub choices: AuthorsChoices,
 }
 
 impl FilteredConfig {
@@ -66,6 +72,7 @@ impl FilteredConfig {
             image_thresholds: Vec::new(),
             contribution_samples: 0,
             adaptive_vmesh: VirtualMeshParams::default(),
+            choices: AuthorsChoices::default(),
         }
     }
 
@@ -202,6 +209,40 @@ struct Built {
     /// The GPU adapter that precomputed the records (None: the CPU).
     precompute_gpu: Option<String>,
     mix: Option<[f64; 3]>,
+    /// Why a GPU run renders this row on the CPU (a choice of [`AuthorsChoices`] the kernel
+    /// has no code for).
+    cpu_reason: Option<String>,
+}
+
+/// The records `upload` puts on the GPU, unless `refused` (a render option the kernel does not
+/// follow) or the upload itself names a choice the kernel has no code for
+/// ([`voxlod_gpu::Error::Unsupported`]): then none, and the reason the row renders on the CPU.
+fn upload_or_cpu(
+    gpu: Option<&SceneGpu<'_>>,
+    refused: Option<&'static str>,
+    upload: impl FnOnce(&FilteredKernel<'_>) -> Result<GpuRecords, voxlod_gpu::Error>,
+) -> Result<(Option<GpuRecords>, Option<String>), Error> {
+    let Some(k) = gpu else { return Ok((None, None)) };
+    if let Some(what) = refused {
+        return Ok((None, Some(what.to_string())));
+    }
+    match upload(&k.kernels.filtered) {
+        Ok(records) => Ok((Some(records), None)),
+        Err(voxlod_gpu::Error::Unsupported { what }) => Ok((None, Some(what.to_string()))),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// The render option of `choices` the GPU kernel does not follow for a row, if any:
+/// `vjk` says whether the row has \[VJK21\] voxels (the chord matters only for them).
+fn gpu_refusal(choices: &AuthorsChoices, vjk: bool) -> Option<&'static str> {
+    if choices.pattern != PixelPattern::Fixed {
+        Some("a jittered pixel pattern")
+    } else if vjk && choices.vjk_chord != VjkChord::PerRay {
+        Some("a cached [VJK21] chord")
+    } else {
+        None
+    }
 }
 
 /// Everything a scene section shares.
@@ -251,7 +292,8 @@ pub(super) fn run(
             let mut heat_maps = vec![LabeledImage::new("reference", references[0].clone())];
             for b in &built {
                 progress(&format!("{label}: {res}³ {}: rendering {size}²", b.method));
-                let (row, first) = render_row(inputs, b, gpu, res, size, &references)?;
+                let (row, first) =
+                    render_row(inputs, &config.choices, b, gpu, res, size, &references)?;
                 if size == res {
                     let heat = error_heatmap(&first, &references[0], 0.25)?;
                     figure.push(LabeledImage::new(b.method.clone(), first));
@@ -267,7 +309,7 @@ pub(super) fn run(
                 progress(&format!("{label}: {res}³ Adaptive: measured voxel contributions"));
                 let options = ContributionOptions {
                     samples: config.contribution_samples,
-                    render: render_options(inputs, size),
+                    render: render_options(inputs, &config.choices, size),
                     ..Default::default()
                 };
                 let light = inputs.scene.light();
@@ -309,7 +351,8 @@ fn build_all(
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<Built>, adaptive::Candidates), Error> {
     let geometry = inputs.geometry;
-    let opts = PrecomputeOptions { rays: config.rays, ..Default::default() };
+    let choices = &config.choices;
+    let opts = choices.precompute(config.rays);
     let mut built = Vec::new();
 
     progress("Averages");
@@ -328,51 +371,66 @@ fn build_all(
         None => (precompute(ctx, &opts, averages::fit)?, None),
     };
     let precompute_time = t.elapsed();
+    let g = AveragesGrid { grid: g, normal: choices.averages_normal };
+    let (gpu_records, cpu_reason) =
+        upload_or_cpu(gpu, gpu_refusal(choices, false), |k| k.upload_averages_grid(&g))?;
     built.push(Built {
         method: "Averages".into(),
-        record_bytes: g.record_bytes() as f64,
-        memory_bytes: g.memory_bytes(),
+        record_bytes: g.grid.record_bytes() as f64,
+        memory_bytes: g.grid.memory_bytes(),
         precompute: precompute_time,
         precompute_gpu,
-        gpu: gpu.map(|k| k.kernels.filtered.upload_averages(&g)).transpose()?,
+        gpu: gpu_records,
         grid: Box::new(g),
         mix: None,
+        cpu_reason,
     });
 
     progress("[VJK21]");
     let t = Instant::now();
     let g = precompute(ctx, &opts, sggx::fit)?;
     let precompute_time = t.elapsed();
+    let (gpu_records, cpu_reason) =
+        upload_or_cpu(gpu, gpu_refusal(choices, true), |k| k.upload_vjk21(&g))?;
     built.push(Built {
         method: "[VJK21]".into(),
         record_bytes: g.record_bytes() as f64,
         memory_bytes: g.memory_bytes(),
         precompute: precompute_time,
         precompute_gpu: None,
-        gpu: gpu.map(|k| k.kernels.filtered.upload_vjk21(&g)).transpose()?,
+        gpu: gpu_records,
         grid: Box::new(g),
         mix: None,
+        cpu_reason,
     });
 
     progress("virtual mesh");
     let t = Instant::now();
     let g = precompute(ctx, &opts, virtual_mesh::fit)?;
     let precompute_vm = t.elapsed();
-    for (rule, projected_area, name) in [
+    let mut rows = vec![
         (DirectionalRule::Lines, false, "virtual mesh (lines)"),
         (DirectionalRule::Circles, false, "virtual mesh (circles)"),
         (DirectionalRule::Lines, true, "virtual mesh (lines × area)"),
-    ] {
-        let grid = VirtualMeshGrid { rule, projected_area, ..VirtualMeshGrid::new(g.clone()) };
+    ];
+    if choices.opacity_rule == DirectionalRule::Authors {
+        rows.push((DirectionalRule::Authors, false, "virtual mesh (authors' opacity)"));
+    }
+    for (rule, projected_area, name) in rows {
+        let base = VirtualMeshParams { rule, projected_area, ..Default::default() };
+        let grid = VirtualMeshGrid::with_params(g.clone(), choices.virtual_mesh_shading(base));
+        let (gpu_records, cpu_reason) =
+            upload_or_cpu(gpu, gpu_refusal(choices, false), |k| k.upload_virtual_mesh(&grid))?;
         built.push(Built {
             method: name.into(),
             record_bytes: g.record_bytes() as f64,
             memory_bytes: g.memory_bytes(),
             precompute: precompute_vm,
             precompute_gpu: None,
-            gpu: gpu.map(|k| k.kernels.filtered.upload_virtual_mesh(&grid)).transpose()?,
+            gpu: gpu_records,
             grid: Box::new(grid),
             mix: None,
+            cpu_reason,
         });
     }
 
@@ -382,7 +440,8 @@ fn build_all(
         rays: config.rays,
         heldout: config.heldout,
         ambient: inputs.ambient,
-        vmesh: config.adaptive_vmesh,
+        seed: choices.precompute_seed,
+        vmesh: choices.virtual_mesh_shading(config.adaptive_vmesh),
         ..Default::default()
     };
     let candidates = adaptive::Candidates::build(ctx, &options)?;
@@ -392,6 +451,8 @@ fn build_all(
     for (selector, threshold) in selections {
         let t = Instant::now();
         let g = candidates.select_with(selector, threshold)?;
+        let (gpu_records, cpu_reason) =
+            upload_or_cpu(gpu, gpu_refusal(choices, true), |k| k.upload_adaptive(&g))?;
         built.push(Built {
             method: match selector {
                 Selector::HeldOut => format!("Adaptive τ={threshold}"),
@@ -402,16 +463,29 @@ fn build_all(
             precompute: candidates_time + t.elapsed(),
             precompute_gpu: None,
             mix: Some(g.mix()),
-            gpu: gpu.map(|k| k.kernels.filtered.upload_adaptive(&g)).transpose()?,
+            gpu: gpu_records,
             grid: Box::new(g),
+            cpu_reason,
         });
     }
     Ok((built, candidates))
 }
 
-/// The filtered renderer's options for the study's frames at `size`².
-fn render_options(inputs: &SceneInputs<'_>, size: u32) -> filtered::Options {
-    filtered::Options { width: size, height: size, ambient: inputs.ambient, shadows: true }
+/// The filtered renderer's options for the study's frames at `size`², with the render
+/// choices of `choices`.
+fn render_options(
+    inputs: &SceneInputs<'_>,
+    choices: &AuthorsChoices,
+    size: u32,
+) -> filtered::Options {
+    let plain = filtered::Options {
+        width: size,
+        height: size,
+        ambient: inputs.ambient,
+        shadows: true,
+        ..Default::default()
+    };
+    choices.render(plain)
 }
 
 /// Renders one representation from every view at `size`², cold then warm, and scores it
@@ -419,13 +493,17 @@ fn render_options(inputs: &SceneInputs<'_>, size: u32) -> filtered::Options {
 /// Returns the row and the view-0 image.
 fn render_row(
     inputs: &SceneInputs<'_>,
+    choices: &AuthorsChoices,
     b: &Built,
     gpu: Option<&SceneGpu<'_>>,
     res: u32,
     size: u32,
     references: &[Srgb8Image],
 ) -> Result<(MethodRow, Srgb8Image), Error> {
-    let options = render_options(inputs, size);
+    // The GPU kernel renders the plain options (a render choice it has no code for sent the
+    // row to the CPU already).
+    let plain = render_options(inputs, &AuthorsChoices::default(), size);
+    let options = render_options(inputs, choices, size);
     let light = inputs.scene.light();
     let (mut cold, mut warm) = (Duration::ZERO, Duration::ZERO);
     let mut metrics = Vec::new();
@@ -434,12 +512,14 @@ fn render_row(
     for (camera, reference) in inputs.views.iter().zip(references) {
         let image = match (gpu, &b.gpu) {
             (Some(k), Some(records)) => {
+                // Uploaded rows are those whose images do not depend on the render choices
+                // (`gpu_refusal`): the kernel renders them with the defaults.
                 let kernel = &k.kernels.filtered;
                 let t = Instant::now();
-                let image = kernel.render(records, camera, &light, background, &options)?;
+                let image = kernel.render(records, camera, &light, background, &plain)?;
                 cold += t.elapsed();
                 let t = Instant::now();
-                drop(kernel.render(records, camera, &light, background, &options)?);
+                drop(kernel.render(records, camera, &light, background, &plain)?);
                 warm += t.elapsed();
                 image
             }
@@ -477,9 +557,10 @@ fn render_row(
         mse: Spread::of(&metrics.iter().map(|m| m.mse).collect::<Vec<_>>()),
         ssim: Spread::of(&metrics.iter().map(|m| m.ssim).collect::<Vec<_>>()),
         mix: b.mix,
-        backend: gpu.map(|k| match b.gpu {
-            Some(_) => k.kernels.name.clone(),
-            None => "cpu".into(),
+        backend: gpu.map(|k| match (&b.gpu, &b.cpu_reason) {
+            (Some(_), _) => k.kernels.name.clone(),
+            (None, Some(why)) => format!("cpu (no GPU kernel for {why})"),
+            (None, None) => "cpu".into(),
         }),
         precompute_backend: gpu.map(|_| b.precompute_gpu.clone().unwrap_or_else(|| "cpu".into())),
     };

@@ -16,6 +16,8 @@
 //!   when `n·v < 0`: a voxel is shaded two-sided, as the ground truth shades double-sided
 //!   leaves, since one mean normal cannot say which side a viewer sees. A record without a
 //!   normal (all-zero bytes, never produced by [`fit`]) is shaded facing the viewer.
+//!   [`AveragesNormal::AsStored`] shades with the stored normal as it is instead, as the
+//!   authors' shading does with every normal it is given; [`AveragesGrid`] carries the choice.
 //! - **Opacity along a direction** is the record's opacity, whatever the direction and chord
 //!   ([`Opacity::Alpha`]).
 
@@ -23,9 +25,12 @@ use glam::{DVec3, Vec3};
 use voxlod_format::records::AverageRecord;
 use voxlod_scene::LightSample;
 
-use super::Opacity;
+use glam::UVec3;
+use voxlod_format::GridSpec;
+
 use super::eigen::symmetric_eigen;
 use super::voxel_samples::VoxelSamples;
+use super::{Appearance, AppearanceGrid, Opacity};
 use super::{RecordAppearance, record_material};
 use crate::shading::shade;
 use voxlod_format::records::SpecularRecord;
@@ -74,8 +79,15 @@ impl RecordAppearance for AverageRecord {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        let n = shading_normal(self.normal(), to_viewer);
-        shade(&record_material(self.color(), specular), n, to_viewer, light, visibility, ambient)
+        radiance_with(
+            self,
+            AveragesNormal::TowardViewer,
+            specular,
+            to_viewer,
+            light,
+            visibility,
+            ambient,
+        )
     }
 
     /// The shading normal faces away from the light: [`shade`]'s direct and specular terms
@@ -89,24 +101,104 @@ impl RecordAppearance for AverageRecord {
 /// sided), or the direction to the viewer where it has none.
 #[inline]
 fn shading_normal(n: Vec3, to_viewer: Vec3) -> Vec3 {
+    shading_normal_with(n, to_viewer, AveragesNormal::TowardViewer)
+}
+
+/// [`shading_normal`] under `mode`: [`AveragesNormal::AsStored`] keeps the mean normal as it
+/// is (the direction to the viewer still stands in for a missing one).
+#[inline]
+fn shading_normal_with(n: Vec3, to_viewer: Vec3, mode: AveragesNormal) -> Vec3 {
     if n == Vec3::ZERO {
         to_viewer
-    } else if n.dot(to_viewer) < 0.0 {
+    } else if mode == AveragesNormal::TowardViewer && n.dot(to_viewer) < 0.0 {
         -n
     } else {
         n
     }
 }
 
+/// How an Averages voxel's mean normal meets the viewer when shading (Brito, Poulin and
+/// Teichrieb 2023, §5: one average normal per voxel).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum AveragesNormal {
+    /// Ours: flipped toward the viewer where it faces away (two-sided, as the ground truth
+    /// shades double-sided surfaces).
+    #[default]
+    TowardViewer,
+    /// As stored, whichever side the viewer is on: the authors' shading (`phongShading` of
+    /// their `representations.h`) uses every normal it is given as it is, so a voxel seen
+    /// from behind its mean normal is lit as its front is.
+    AsStored,
+}
+
+/// Radiance of one Averages record toward `to_viewer` with the normal rule `mode` (module
+/// docs); [`RecordAppearance::radiance`] is this with [`AveragesNormal::TowardViewer`].
+pub fn radiance_with(
+    rec: &AverageRecord,
+    mode: AveragesNormal,
+    specular: Option<&SpecularRecord>,
+    to_viewer: Vec3,
+    light: &LightSample,
+    visibility: f32,
+    ambient: Vec3,
+) -> Vec3 {
+    let n = shading_normal_with(rec.normal(), to_viewer, mode);
+    shade(&record_material(rec.color(), specular), n, to_viewer, light, visibility, ambient)
+}
+
+/// A grid of Averages records with the choice of [`AveragesNormal`] (the plain
+/// [`AppearanceGrid`] of Averages records always flips toward the viewer).
+#[derive(Clone, Debug)]
+pub struct AveragesGrid {
+    /// The records (and specular side records).
+    pub grid: AppearanceGrid<AverageRecord>,
+    /// How the mean normal meets the viewer.
+    pub normal: AveragesNormal,
+}
+
+impl Appearance for AveragesGrid {
+    fn grid(&self) -> &GridSpec {
+        &self.grid.grid
+    }
+
+    fn len(&self) -> usize {
+        self.grid.records.len()
+    }
+
+    fn index_of(&self, c: UVec3) -> Option<usize> {
+        self.grid.records.index_of(c)
+    }
+
+    fn opacity(&self, index: usize, _dir: Vec3) -> Opacity {
+        Opacity::Alpha(self.grid.records.values()[index].opacity())
+    }
+
+    fn radiance(
+        &self,
+        index: usize,
+        to_viewer: Vec3,
+        light: &LightSample,
+        visibility: f32,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let rec = &self.grid.records.values()[index];
+        let specular = self.grid.specular.as_ref().map(|s| &s[index]);
+        radiance_with(rec, self.normal, specular, to_viewer, light, visibility, ambient)
+    }
+
+    fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
+        let n = self.grid.records.values()[index].normal();
+        shading_normal_with(n, to_viewer, self.normal).dot(light.to_light) > 0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use glam::UVec3;
-    use voxlod_format::{BrickMap, GridSpec};
+    use voxlod_format::BrickMap;
     use voxlod_scene::MaterialSample;
 
     use super::*;
     use crate::appearance::voxel_samples::{RaySample, SurfaceSample};
-    use crate::appearance::{Appearance, AppearanceGrid};
 
     fn line(occluded: bool, normal: Option<Vec3>, albedo: Vec3) -> RaySample {
         RaySample {
@@ -282,5 +374,41 @@ mod tests {
         let d = diffuse.radiance(0, Vec3::Z, &light, 1.0, Vec3::ZERO);
         let s = shiny.radiance(0, Vec3::Z, &light, 1.0, Vec3::ZERO);
         assert!(s.x > d.x * 2.0, "{s} vs {d}");
+    }
+
+    /// Seen from behind its mean normal, ours shades the mirrored normal, the authors' choice
+    /// the normal as stored: lit from the front, the back view is dark with ours (the flipped
+    /// normal faces away from the light) and lit as stored; from the front both agree.
+    #[test]
+    fn stored_normal_is_not_flipped_toward_the_viewer() {
+        let rec = AverageRecord::new(Vec3::splat(0.5), Vec3::Z, 0.6);
+        let flip = AveragesGrid { grid: grid_of(rec, None), normal: AveragesNormal::TowardViewer };
+        let stored = AveragesGrid { normal: AveragesNormal::AsStored, ..flip.clone() };
+        let pi = std::f32::consts::PI;
+        let light =
+            LightSample { to_light: Vec3::Z, distance: f32::INFINITY, irradiance: Vec3::splat(pi) };
+        let front = Vec3::new(0.0, 0.6, 0.8);
+        let back = Vec3::new(0.0, 0.6, -0.8);
+        let ambient = Vec3::splat(0.1);
+        assert_eq!(
+            flip.radiance(0, front, &light, 1.0, ambient),
+            stored.radiance(0, front, &light, 1.0, ambient)
+        );
+        // The flipping grid equals the plain grid of records.
+        let plain = grid_of(rec, None);
+        assert_eq!(
+            flip.radiance(0, back, &light, 1.0, ambient),
+            plain.radiance(0, back, &light, 1.0, ambient)
+        );
+        let dark = flip.radiance(0, back, &light, 1.0, ambient);
+        let lit = stored.radiance(0, back, &light, 1.0, ambient);
+        let albedo = rec.color();
+        assert!((dark - albedo * ambient).abs().max_element() < 1e-6, "ambient only: {dark}");
+        let full = albedo * (ambient + Vec3::ONE);
+        assert!((lit - full).abs().max_element() < 1e-5, "n·l = 1 as stored: {lit} vs {full}");
+        assert!(!flip.needs_visibility(0, back, &light));
+        assert!(stored.needs_visibility(0, back, &light));
+        assert_eq!(stored.opacity(0, back), Opacity::Alpha(rec.opacity()));
+        assert_eq!((stored.len(), stored.index_of(UVec3::ONE)), (1, Some(0)));
     }
 }

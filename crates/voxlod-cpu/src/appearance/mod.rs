@@ -23,8 +23,113 @@ pub mod voxel_samples;
 
 use glam::Vec3;
 use voxlod_format::records::SpecularRecord;
+
+use crate::render::filtered::{self, PixelPattern, VjkChord};
+use averages::AveragesNormal;
+use precompute::PrecomputeOptions;
+use subgrid::DirectionalRule;
+use virtual_mesh::{FaceSampling, ShadingFallback, VirtualMeshParams};
 use voxlod_format::{BrickMap, GridSpec};
 use voxlod_scene::LightSample;
+
+/// Where this implementation chose differently from the authors' public code of Brito, Poulin
+/// and Teichrieb 2023 (`cjsb/voxel-filtered-appearance`), one field per choice, each an enum
+/// whose default is ours and whose other variant is theirs; plus the seeds of the two random
+/// sources a paired comparison varies (the precompute's sampling lines, the render's pixel
+/// pattern). The default is exactly today's pipeline.
+///
+/// It reaches the three places it acts on through [`AuthorsChoices::virtual_mesh`] (the
+/// virtual mesh's directional opacity, face samples and fallback),
+/// [`AuthorsChoices::precompute`] (the lines' seed), [`AuthorsChoices::render`] (the \[VJK21\]
+/// chord and the pixel pattern of [`crate::render::filtered`]) and
+/// [`averages::AveragesGrid`] (the Averages normal).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct AuthorsChoices {
+    /// Directional opacity of the virtual mesh's subgrid (§3.4): ours
+    /// [`DirectionalRule::Lines`], the authors' [`DirectionalRule::Authors`] (their window,
+    /// circle radii, 3×3 kernel and max rule, not normalized).
+    pub opacity_rule: DirectionalRule,
+    /// Shading samples per visible distribution face of the virtual mesh (§3.3, §4).
+    pub face_samples: FaceSamples,
+    /// What a virtual-mesh voxel shades with when no normal faces the viewer.
+    pub fallback: ShadingFallback,
+    /// The chord \[VJK21\] voxels are evaluated with when rendering (§4 caches every method's
+    /// opacity per voxel).
+    pub vjk_chord: VjkChord,
+    /// Whether an Averages voxel's mean normal is flipped toward the viewer (§5).
+    pub averages_normal: AveragesNormal,
+    /// Seed of the precompute's sampling lines ([`PrecomputeOptions::seed`]; 0 by default).
+    pub precompute_seed: u32,
+    /// Where the 4 camera rays of a pixel go ([`PixelPattern::Fixed`] by default; a seeded
+    /// jittered pattern otherwise).
+    pub pattern: PixelPattern,
+}
+
+/// Shading samples per visible distribution face of the virtual mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum FaceSamples {
+    /// Ours: [`virtual_mesh::DEFAULT_SAMPLES_PER_FACE`] (16) fixed stratified points
+    /// ([`FaceSampling::Stratified`]).
+    #[default]
+    Fixed,
+    /// The paper's "as many as 40 samples per visible face" (§4), drawn as the authors' code
+    /// does: [`virtual_mesh::AUTHORS_SAMPLES_PER_FACE`] random samples of
+    /// [`virtual_mesh::AUTHORS_ATTEMPTS`] attempts each ([`FaceSampling::Random`]).
+    Random {
+        /// Seed of the samples.
+        seed: u32,
+    },
+}
+
+impl AuthorsChoices {
+    /// Every choice the authors' way (seeds 0, the fixed pixel pattern): their directional
+    /// opacity, 40 random face samples, the unshaded fallback, a cached \[VJK21\] chord
+    /// ([`VjkChord::CachedChord`]) and the Averages normal as stored.
+    pub fn authors() -> Self {
+        Self {
+            opacity_rule: DirectionalRule::Authors,
+            face_samples: FaceSamples::Random { seed: 0 },
+            fallback: ShadingFallback::Unshaded,
+            vjk_chord: VjkChord::CachedChord,
+            averages_normal: AveragesNormal::AsStored,
+            ..Self::default()
+        }
+    }
+
+    /// The virtual-mesh parameters of these choices, on top of `base` (whose projected-area
+    /// switch is kept): the opacity rule, the face samples and the fallback.
+    pub fn virtual_mesh(&self, base: VirtualMeshParams) -> VirtualMeshParams {
+        let (samples_per_face, sampling) = match self.face_samples {
+            FaceSamples::Fixed => (base.samples_per_face, FaceSampling::Stratified),
+            FaceSamples::Random { seed } => {
+                (virtual_mesh::AUTHORS_SAMPLES_PER_FACE, FaceSampling::authors(seed))
+            }
+        };
+        VirtualMeshParams {
+            rule: self.opacity_rule,
+            samples_per_face,
+            sampling,
+            fallback: self.fallback,
+            ..base
+        }
+    }
+
+    /// The face samples and fallback of these choices on top of `base`, keeping its rule (for
+    /// the study's rows that compare rules).
+    pub fn virtual_mesh_shading(&self, base: VirtualMeshParams) -> VirtualMeshParams {
+        VirtualMeshParams { rule: base.rule, ..self.virtual_mesh(base) }
+    }
+
+    /// The precompute options with `rays` lines per voxel and these choices' seed.
+    pub fn precompute(&self, rays: u32) -> PrecomputeOptions {
+        PrecomputeOptions { rays, seed: self.precompute_seed }
+    }
+
+    /// `base` with these choices' \[VJK21\] chord and pixel pattern.
+    pub fn render(&self, base: filtered::Options) -> filtered::Options {
+        filtered::Options { vjk_chord: self.vjk_chord, pattern: self.pattern, ..base }
+    }
+}
 
 /// How a voxel attenuates light along one direction: what a renderer caches per voxel and
 /// direction, and applies per ray with that ray's chord through the voxel.
@@ -207,5 +312,49 @@ impl<R: RecordAppearance<Params = ()>> Appearance for AppearanceGrid<R> {
 
     fn needs_visibility(&self, index: usize, to_viewer: Vec3, light: &LightSample) -> bool {
         self.records.values()[index].needs_visibility((), to_viewer, light)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default choices are today's pipeline; each of the authors' choices moves exactly
+    /// its own parameter.
+    #[test]
+    fn default_choices_are_ours_and_each_authors_choice_moves_its_parameter() {
+        let ours = AuthorsChoices::default();
+        assert_eq!(ours.virtual_mesh(VirtualMeshParams::default()), VirtualMeshParams::default());
+        assert_eq!(ours.precompute(150), PrecomputeOptions::default());
+        let plain = filtered::Options { width: 7, ..Default::default() };
+        assert_eq!(ours.render(plain), plain);
+
+        let theirs = AuthorsChoices::authors();
+        let p =
+            theirs.virtual_mesh(VirtualMeshParams { projected_area: true, ..Default::default() });
+        assert_eq!(p.rule, DirectionalRule::Authors);
+        assert_eq!(p.samples_per_face, virtual_mesh::AUTHORS_SAMPLES_PER_FACE);
+        assert_eq!(
+            p.sampling,
+            FaceSampling::Random { attempts: virtual_mesh::AUTHORS_ATTEMPTS, seed: 0 }
+        );
+        assert_eq!(p.fallback, ShadingFallback::Unshaded);
+        assert!(p.projected_area, "the base's projected-area switch is kept");
+        let shading = theirs.virtual_mesh_shading(VirtualMeshParams {
+            rule: DirectionalRule::Circles,
+            ..Default::default()
+        });
+        assert_eq!(shading.rule, DirectionalRule::Circles);
+        assert_eq!(shading.fallback, ShadingFallback::Unshaded);
+        assert_eq!(theirs.render(plain).vjk_chord, VjkChord::CachedChord);
+        assert_eq!(theirs.averages_normal, AveragesNormal::AsStored);
+
+        let seeded = AuthorsChoices {
+            precompute_seed: 3,
+            pattern: PixelPattern::Jittered { seed: 5 },
+            ..ours
+        };
+        assert_eq!(seeded.precompute(64), PrecomputeOptions { rays: 64, seed: 3 });
+        assert_eq!(seeded.render(plain).pattern, PixelPattern::Jittered { seed: 5 });
     }
 }

@@ -18,9 +18,11 @@
 //!   `round(255 · occluded / rays)`.
 //!
 //! # Directional opacity
-//! [`DirectionalRule::Lines`] (the default) and the paper-faithful
-//! [`DirectionalRule::Circles`]; the design note §6 measures both against exact cube footprints.
-//! A solid subgrid gives exactly 1 and an empty one 0 under both rules, from any direction.
+//! [`DirectionalRule::Lines`] (the default), the paper's circles made exact for solids
+//! ([`DirectionalRule::Circles`]; the design note §6 measures both against exact cube
+//! footprints), and the rule of the authors' public code as it stands
+//! ([`DirectionalRule::Authors`], not normalized). A solid subgrid gives exactly 1 and an empty
+//! one 0 under every rule, from any direction.
 //! Neither can make a thin plane seen edge-on nearly transparent: the plane's layer of sub-cells
 //! covers a third of the voxel's footprint, so the floor is about 1/3 (Lines measure 0.31).
 
@@ -168,24 +170,56 @@ pub enum DirectionalRule {
     /// pixel circle's area, clamped `acos`), summed over the 16 pixels and **normalized** by the
     /// same sum for a solid voxel.
     Circles,
+    /// The rule of the authors' public code (Brito, Poulin and Teichrieb 2023, §3.4;
+    /// `SubgridOfOpacities::computeOcclusion` and `projectionKernel` of their
+    /// `representations.h`), step by step and **not normalized**, evaluated for the ray
+    /// direction `r = −dir` (their camera ray, travelling from the viewer into the voxel):
+    /// - the Hughes–Möller basis `(u, v)` of `r` (as in [`DirectionalRule::Circles`]); the window
+    ///   is the bounding rectangle of the 8 projected voxel corners, split into 4×4 pixels of
+    ///   `step = extent/4` per axis (a rectangle, not a square);
+    /// - every sub-cell with a non-zero opacity is a circle of radius `√2·step_u` (larger than
+    ///   the sub-cell's circumradius) around its projected centre, which falls in pixel
+    ///   `(⌊(p_u − min_u)/step_u⌋, ⌊(p_v − min_v)/step_v⌋)` (truncation);
+    /// - only the 3×3 pixels around that pixel (clipped to the window) are visited: each a
+    ///   circle of radius `step_u/2` around its centre, covered by `lens area / pixel-circle
+    ///   area`, clamped to [0, 1] with a NaN (a rounding past `acos`'s domain) reading as 1, as
+    ///   their `clampf` does; the pixel keeps the largest `α·coverage`;
+    /// - the voxel's opacity is the mean of the 16 pixels.
+    ///
+    /// [`AUTHORS_SPHERE_RADIUS`] and [`AUTHORS_PIXEL_RADIUS`] give the two radii. The sub-cell
+    /// circles are so much larger than the pixel circles that a solid subgrid covers every
+    /// pixel fully (1 from every direction tested), and a lone sub-cell covers about a quarter
+    /// to a third of the window (where the exact footprint of a sub-cell is a ninth or less
+    /// of the voxel's): the rule extends opacities, as the paper notes of its maximum test (§5).
+    Authors,
 }
+
+/// Radius of a sub-cell's circle under [`DirectionalRule::Authors`], in units of the window's
+/// pixel width `step_u`: `√2`.
+pub const AUTHORS_SPHERE_RADIUS: f32 = std::f32::consts::SQRT_2;
+
+/// Radius of a pixel's circle under [`DirectionalRule::Authors`], in units of `step_u`: `½`.
+pub const AUTHORS_PIXEL_RADIUS: f32 = 0.5;
 
 /// The opacity in [0, 1] of a voxel with sub-cell opacities `alpha` (`round(255·α)`, index
 /// `x + 3y + 9z`) seen along `dir` (any length; a zero or non-finite `dir` reads as +z), under
-/// `rule`. All zero gives exactly 0, all 255 exactly 1; the result depends only on the line,
-/// not on the sign of `dir`, up to the fixed pattern's placement.
+/// `rule`. All zero gives exactly 0, all 255 exactly 1 (computed under
+/// [`DirectionalRule::Authors`], which reaches 1 on every direction tested); the result depends
+/// only on the line, not on the sign of `dir`, up to the fixed pattern's placement (and, for
+/// the authors' rule, the pixel a projected centre lying exactly on a pixel boundary falls in).
 pub fn directional_opacity(alpha: &[u8; 27], dir: Vec3, rule: DirectionalRule) -> f32 {
     let (lo, hi) = alpha.iter().fold((255u8, 0u8), |(lo, hi), &a| (lo.min(a), hi.max(a)));
     if hi == 0 {
         return 0.0;
     }
-    if lo == 255 {
+    if lo == 255 && rule != DirectionalRule::Authors {
         return 1.0;
     }
     let d = dir.try_normalize().unwrap_or(Vec3::Z);
     match rule {
         DirectionalRule::Lines => lines(alpha, d),
         DirectionalRule::Circles => circles(alpha, d),
+        DirectionalRule::Authors => authors(alpha, -d),
     }
 }
 
@@ -278,6 +312,71 @@ fn circles(alpha: &[u8; 27], d: Vec3) -> f32 {
         }
     }
     if den > 0.0 { (num / den).clamp(0.0, 1.0) } else { 0.0 }
+}
+
+/// The area the authors' `circleIntersection` gives for two discs of radii `r1`, `r2` whose
+/// centres are `dist` apart, `None` when they do not meet (`dist > r1 + r2`): containment
+/// gives the smaller disc, otherwise the two circular segments `½r²(θ − sin θ)` with the
+/// unclamped `acos` (NaN where rounding leaves its domain, as theirs).
+fn authors_lens(dist: f32, r1: f32, r2: f32) -> Option<f32> {
+    if dist > r1 + r2 {
+        return None;
+    }
+    let small = r1.min(r2);
+    if dist <= (r2 - r1).abs() {
+        return Some(PI * small * small);
+    }
+    let alpha = ((r1 * r1 + dist * dist - r2 * r2) / (2.0 * r1 * dist)).acos() * 2.0;
+    let beta = ((r2 * r2 + dist * dist - r1 * r1) / (2.0 * r2 * dist)).acos() * 2.0;
+    let a1 = 0.5 * beta * r2 * r2 - 0.5 * r2 * r2 * beta.sin();
+    let a2 = 0.5 * alpha * r1 * r1 - 0.5 * r1 * r1 * alpha.sin();
+    Some(a1 + a2)
+}
+
+/// [`DirectionalRule::Authors`] for the unit ray direction `r` (already `−dir`), in
+/// voxel-local coordinates centred on the voxel (the authors project relative to the camera;
+/// a translation of the plane moves nothing but rounding).
+fn authors(alpha: &[u8; 27], r: Vec3) -> f32 {
+    let (u, v) = hughes_moeller(r);
+    let project = |p: Vec3| Vec2::new(p.dot(u), p.dot(v));
+    let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+    for c in 0..8u32 {
+        let corner = Vec3::new((c & 1) as f32, (c >> 1 & 1) as f32, (c >> 2 & 1) as f32);
+        let q = project(corner - 0.5);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let step = (hi - lo) / 4.0;
+    let (r_sphere, r_pixel) = (step.x * AUTHORS_SPHERE_RADIUS, step.x * AUTHORS_PIXEL_RADIUS);
+    let pixel_area = PI * r_pixel * r_pixel;
+    if pixel_area.is_nan() || pixel_area <= 0.0 {
+        return 0.0;
+    }
+    let centre = |i: i32, j: i32| lo + Vec2::new(i as f32 + 0.5, j as f32 + 0.5) * step;
+    let mut grid = [[0.0f32; 4]; 4];
+    for (c, &a) in alpha.iter().enumerate().filter(|(_, a)| **a > 0) {
+        let (x, y, z) = (c % 3, c / 3 % 3, c / 9);
+        let p = project((Vec3::new(x as f32, y as f32, z as f32) + 0.5) / 3.0 - 0.5);
+        let cell = ((p - lo) / step).to_array().map(|w| w as i32);
+        let a = a as f32 / 255.0;
+        for i in cell[0] - 1..=cell[0] + 1 {
+            for j in cell[1] - 1..=cell[1] + 1 {
+                if !(0..4).contains(&i) || !(0..4).contains(&j) {
+                    continue;
+                }
+                let Some(area) = authors_lens(p.distance(centre(i, j)), r_sphere, r_pixel) else {
+                    continue;
+                };
+                // A NaN area covers fully, as `fmaxf(0, fminf(x, 1))` does (`clamp` would
+                // keep the NaN).
+                let ratio = area / pixel_area;
+                let cover = if ratio.is_nan() { 1.0 } else { ratio.clamp(0.0, 1.0) };
+                let slot = &mut grid[i as usize][j as usize];
+                *slot = slot.max(a * cover);
+            }
+        }
+    }
+    (grid.iter().flatten().sum::<f32>() / 16.0).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

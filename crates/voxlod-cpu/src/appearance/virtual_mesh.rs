@@ -31,13 +31,16 @@
 //! - A distribution face is sampled at `K` fixed barycentric points ([`barycentric_point`]:
 //!   the square-root warp of a `K`-point Hammersley set, default [`DEFAULT_SAMPLES_PER_FACE`]);
 //!   the normal is `normalize(b0 N0 + b1 N1 + b2 N2)`, and samples with `n·v ≤ 0` are skipped.
+//!   [`FaceSampling::Random`] samples as the authors' code does instead (up to `K` = 40 random
+//!   points, each retried until its normal faces the viewer).
 //!   A fixed-set face uses each of its stored normals with `n·v > 0`.
 //! - Each accepted normal gives [`shade`]`(albedo = face colour, n, v, …)`; a face's value is the
 //!   mean over its accepted normals; the voxel's is the projected-area-weighted mean over faces
 //!   with at least one accepted normal (equal weights if all those areas are 0), so the ambient
 //!   term is the area-weighted face colour times `ambient`, as in the authors' code.
 //! - **Fallback** when no normal is accepted: the mean of [`shade`] over all stored normals,
-//!   without the visibility filter (what the ground truth does with back faces).
+//!   without the visibility filter (what the ground truth does with back faces); or, as the
+//!   authors' code does, no radiance at all ([`ShadingFallback::Unshaded`]).
 //! - **Opacity**: [`Opacity::Alpha`] of [`subgrid::directional_opacity`] under the grid's
 //!   [`DirectionalRule`].
 
@@ -52,6 +55,7 @@ use super::sggx::{self, radical_inverse2};
 use super::subgrid::{self, DirectionalRule};
 use super::voxel_samples::VoxelSamples;
 use super::{Appearance, AppearanceGrid, Opacity};
+use crate::random::{rand_f32, rand_u32};
 use crate::shading::shade;
 
 /// Vertex indices of the eight octahedron faces (vertex `2k` = `+e_k`, `2k+1` = `−e_k`), the
@@ -73,6 +77,72 @@ pub const THETA_MIN: f64 = 0.1;
 
 /// Default number of barycentric samples per distribution face.
 pub const DEFAULT_SAMPLES_PER_FACE: u32 = 16;
+
+/// The authors' number of shading samples per visible distribution face (Brito, Poulin and
+/// Teichrieb 2023, §4: "as many as 40 samples per visible face"; their sample program).
+pub const AUTHORS_SAMPLES_PER_FACE: u32 = 40;
+
+/// The authors' attempts per sample at a point whose normal faces the viewer (their
+/// `getSampleVMesh` is called with `nbAttempts = 5`).
+pub const AUTHORS_ATTEMPTS: u32 = 5;
+
+/// How a distribution face of the virtual mesh is sampled for shading (Brito, Poulin and
+/// Teichrieb 2023, §3.3 "Projected Area Sampling" and §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum FaceSampling {
+    /// Ours: the `samples_per_face` fixed barycentric points of [`barycentric_point`]
+    /// (stratified, no randomness, the same on every backend); samples whose normal faces away
+    /// from the viewer are skipped.
+    #[default]
+    Stratified,
+    /// The authors' (`VirtualMesh::shadeWithVirtualMesh` and `getSampleVMesh` of their
+    /// `representations.h`): `samples_per_face` samples (40 in their program,
+    /// [`AUTHORS_SAMPLES_PER_FACE`]), each drawing up to `attempts` ([`AUTHORS_ATTEMPTS`])
+    /// uniform points of the projected face until one's interpolated normal faces the viewer;
+    /// a sample whose attempts all fail is dropped. Their numbers `u₀, u₁` are clamped to
+    /// `[0, 0.999]` and warped as their `samplingTriangle` does, and their ray–triangle
+    /// intersection hands the barycentrics to the vertex normals rotated by one
+    /// (`n = (1 − √u₀) N₀ + √u₀ u₁ N₁ + √u₀ (1 − u₁) N₂`, the same uniform distribution).
+    /// The numbers are `rand_f32(key, sample, dimension)` of [`crate::random`] with
+    /// `key` = [`record_key`] of the record and the dimensions drawn from `seed`: the same
+    /// record seen from the same direction always gives the same value (what a per-voxel
+    /// cache keeps), and another seed gives an independent draw.
+    Random {
+        /// Points tried per sample.
+        attempts: u32,
+        /// Seed of the random numbers.
+        seed: u32,
+    },
+}
+
+impl FaceSampling {
+    /// The authors' sampling with `seed`: [`AUTHORS_ATTEMPTS`] attempts per sample.
+    pub fn authors(seed: u32) -> Self {
+        Self::Random { attempts: AUTHORS_ATTEMPTS, seed }
+    }
+}
+
+/// What a virtual-mesh voxel shades with when no sampled or stored normal faces the viewer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ShadingFallback {
+    /// Ours: the mean of [`shade`] over every stored normal, without the visibility filter
+    /// (what the ground truth does with back faces seen through).
+    #[default]
+    AllStoredNormals,
+    /// The authors': the voxel is left unshaded — `shadeWithVirtualMesh` returns black with
+    /// `shaded = false` and a zero average colour (their ambient colour), so the voxel
+    /// composites no radiance, only its opacity.
+    Unshaded,
+}
+
+/// A 32-bit key of a record's bytes (FNV-1a over its 136 bytes, then one PCG3D round): the
+/// random id of [`FaceSampling::Random`], a function of the record alone.
+pub fn record_key(rec: &VirtualMeshRecord) -> u32 {
+    let h = bytemuck::bytes_of(rec)
+        .iter()
+        .fold(0x811c_9dc5u32, |h, &b| (h ^ b as u32).wrapping_mul(0x0100_0193));
+    rand_u32(h, 0, 0x7EC0)
+}
 
 /// The face whose octant holds eigen coordinates `c` (snapped at [`SNAP`], 0 counts as `+`).
 pub fn face_of(c: DVec3) -> usize {
@@ -226,8 +296,9 @@ pub fn barycentric_point(i: u32, count: u32) -> Vec3 {
 }
 
 /// Radiance of one virtual-mesh voxel toward `to_viewer` (module docs, shading rules) with
-/// `samples_per_face` barycentric samples per distribution face (0 reads as 1) and the
-/// optional specular side record.
+/// `samples_per_face` fixed barycentric samples per distribution face (0 reads as 1), our
+/// fallback and the optional specular side record: [`shade_record_with`] with
+/// [`FaceSampling::Stratified`] and [`ShadingFallback::AllStoredNormals`].
 pub fn shade_record(
     rec: &VirtualMeshRecord,
     specular: Option<&SpecularRecord>,
@@ -237,8 +308,24 @@ pub fn shade_record(
     ambient: Vec3,
     samples_per_face: u32,
 ) -> Vec3 {
+    let p = VirtualMeshParams { samples_per_face, ..Default::default() };
+    shade_record_with(rec, specular, to_viewer, light, visibility, ambient, &p)
+}
+
+/// Radiance of one virtual-mesh voxel toward `to_viewer` (module docs, shading rules) with the
+/// shading choices of `p` ([`VirtualMeshParams::samples_per_face`],
+/// [`VirtualMeshParams::sampling`], [`VirtualMeshParams::fallback`]).
+pub fn shade_record_with(
+    rec: &VirtualMeshRecord,
+    specular: Option<&SpecularRecord>,
+    to_viewer: Vec3,
+    light: &LightSample,
+    visibility: f32,
+    ambient: Vec3,
+    p: &VirtualMeshParams,
+) -> Vec3 {
     let v = to_viewer.try_normalize().unwrap_or(Vec3::Z);
-    let k = samples_per_face.max(1);
+    let k = p.samples_per_face.max(1);
     let material = |f: usize| MaterialSample {
         albedo: rec.face_color(f),
         alpha: 1.0,
@@ -249,6 +336,14 @@ pub fn shade_record(
         let a = rec.axis(i / 2) * rec.scale(i / 2);
         if i % 2 == 0 { a } else { -a }
     });
+    // The random streams of the authors' sampling (module docs of `FaceSampling::Random`).
+    let random = match p.sampling {
+        FaceSampling::Stratified => None,
+        FaceSampling::Random { attempts, seed } => {
+            let dims = [rand_u32(seed, 0, 0xFACE), rand_u32(seed, 1, 0xFACE)];
+            Some((record_key(rec), attempts.max(1), dims))
+        }
+    };
     let (mut weighted, mut area_sum) = (Vec3::ZERO, 0.0f32);
     let (mut unweighted, mut faces) = (Vec3::ZERO, 0u32);
     for (f, tri) in FACES.iter().enumerate() {
@@ -264,14 +359,32 @@ pub fn shade_record(
                 count += 1;
             }
         };
-        if rec.is_distribution(f) {
-            for i in 0..k {
-                let b = barycentric_point(i, k);
-                let n = (ns[0] * b.x + ns[1] * b.y + ns[2] * b.z).normalize_or_zero();
-                accept(n);
+        match (rec.is_distribution(f), random) {
+            (true, None) => {
+                for i in 0..k {
+                    let b = barycentric_point(i, k);
+                    let n = (ns[0] * b.x + ns[1] * b.y + ns[2] * b.z).normalize_or_zero();
+                    accept(n);
+                }
             }
-        } else {
-            ns.into_iter().filter(|n| *n != Vec3::ZERO).for_each(accept);
+            (true, Some((key, attempts, dims))) => {
+                for i in 0..k {
+                    for a in 0..attempts {
+                        let draw =
+                            (f as u32).wrapping_mul(k).wrapping_add(i).wrapping_mul(attempts) + a;
+                        let u0 = rand_f32(key, draw, dims[0]).clamp(0.0, 0.999);
+                        let u1 = rand_f32(key, draw, dims[1]).clamp(0.0, 0.999);
+                        let su = u0.sqrt();
+                        let b = Vec3::new(1.0 - su, su * u1, su * (1.0 - u1));
+                        let n = (ns[0] * b.x + ns[1] * b.y + ns[2] * b.z).normalize_or_zero();
+                        if n.dot(v) > 0.0 {
+                            accept(n);
+                            break;
+                        }
+                    }
+                }
+            }
+            (false, _) => ns.into_iter().filter(|n| *n != Vec3::ZERO).for_each(accept),
         }
         if count == 0 {
             continue;
@@ -286,6 +399,9 @@ pub fn shade_record(
     }
     if faces > 0 {
         return if area_sum > 0.0 { weighted / area_sum } else { unweighted / faces as f32 };
+    }
+    if p.fallback == ShadingFallback::Unshaded {
+        return Vec3::ZERO;
     }
     // Fallback: every stored normal, no visibility filter.
     let (mut sum, mut count) = (Vec3::ZERO, 0u32);
@@ -332,19 +448,33 @@ pub struct VirtualMeshGrid {
     /// Whether the subgrid's opacity is scaled by [`projected_area_ratio`] (see
     /// [`VirtualMeshParams::projected_area`]).
     pub projected_area: bool,
+    /// How distribution faces are sampled when shading.
+    pub sampling: FaceSampling,
+    /// What a voxel shades with when no normal faces the viewer.
+    pub fallback: ShadingFallback,
 }
 
 impl VirtualMeshGrid {
-    /// The grid with the default rule ([`DirectionalRule::Lines`]),
-    /// [`DEFAULT_SAMPLES_PER_FACE`] and no projected-area scaling.
+    /// The grid with the default parameters ([`VirtualMeshParams::default`]).
     pub fn new(grid: AppearanceGrid<VirtualMeshRecord>) -> Self {
-        let p = VirtualMeshParams::default();
-        Self { grid, rule: p.rule, samples_per_face: p.samples_per_face, projected_area: false }
+        Self::with_params(grid, VirtualMeshParams::default())
+    }
+
+    /// The grid read with parameters `p`.
+    pub fn with_params(grid: AppearanceGrid<VirtualMeshRecord>, p: VirtualMeshParams) -> Self {
+        Self {
+            grid,
+            rule: p.rule,
+            samples_per_face: p.samples_per_face,
+            projected_area: p.projected_area,
+            sampling: p.sampling,
+            fallback: p.fallback,
+        }
     }
 }
 
-/// Parameters of virtual-mesh records: the directional-opacity rule and the barycentric
-/// shading samples per distribution face.
+/// Parameters of virtual-mesh records: the directional-opacity rule, the shading samples per
+/// distribution face, how they are drawn and the shading fallback.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VirtualMeshParams {
     /// How the opacity subgrid is read along a direction.
@@ -359,6 +489,10 @@ pub struct VirtualMeshParams {
     /// voxels, lets light through that the surface stops; the filtered-appearance study of
     /// voxlod-studies measures both.
     pub projected_area: bool,
+    /// How distribution faces are sampled when shading (ours: fixed points).
+    pub sampling: FaceSampling,
+    /// What a voxel shades with when no normal faces the viewer (ours: every stored normal).
+    pub fallback: ShadingFallback,
 }
 
 impl Default for VirtualMeshParams {
@@ -367,6 +501,8 @@ impl Default for VirtualMeshParams {
             rule: DirectionalRule::default(),
             samples_per_face: DEFAULT_SAMPLES_PER_FACE,
             projected_area: false,
+            sampling: FaceSampling::default(),
+            fallback: ShadingFallback::default(),
         }
     }
 }
@@ -389,7 +525,7 @@ impl RecordAppearance for VirtualMeshRecord {
         visibility: f32,
         ambient: Vec3,
     ) -> Vec3 {
-        shade_record(self, specular, to_viewer, light, visibility, ambient, p.samples_per_face)
+        shade_record_with(self, specular, to_viewer, light, visibility, ambient, &p)
     }
 }
 
@@ -400,6 +536,8 @@ impl VirtualMeshGrid {
             rule: self.rule,
             samples_per_face: self.samples_per_face,
             projected_area: self.projected_area,
+            sampling: self.sampling,
+            fallback: self.fallback,
         }
     }
 }

@@ -578,6 +578,15 @@ fn shading_normal(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     return n;
 }
 
+// averages.rs `shading_normal_with`: flag 4 keeps the mean normal as stored
+// (`AveragesNormal::AsStored`), else `shading_normal`.
+fn averages_normal(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    if (params.dims.w & 4u) != 0u {
+        return select(n, v, all(n == vec3<f32>(0.0)));
+    }
+    return shading_normal(n, v);
+}
+
 // The radiance voxel c (record `index`) sends toward the eye.
 fn radiance(index: u32, c: vec3<i32>) -> vec3<f32> {
     let r = records[index];
@@ -600,7 +609,7 @@ fn radiance(index: u32, c: vec3<i32>) -> vec3<f32> {
         }
         return shade_sggx(r, m, to_eye, lit.light, visibility, params.ambient.xyz);
     }
-    let n = shading_normal(r.b.xyz, to_eye);
+    let n = averages_normal(r.b.xyz, to_eye);
     var visibility = 1.0;
     // Appearance::needs_visibility: no shadow ray where the normal faces away from the light.
     if shadows && dot(n, lit.light.to_light) > 0.0 {

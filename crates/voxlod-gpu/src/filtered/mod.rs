@@ -106,10 +106,10 @@
 
 use glam::{Vec3, Vec4};
 use voxlod_cpu::render::baseline;
-use voxlod_cpu::render::filtered::{Options, check_frame};
+use voxlod_cpu::render::filtered::{Options, PixelPattern, VjkChord, check_frame};
 use voxlod_scene::{Camera, Image, Light};
 
-use crate::{Context, Result};
+use crate::{Context, Error, Result};
 
 mod lookup;
 mod params;
@@ -153,14 +153,16 @@ impl<'a> FilteredKernel<'a> {
         options: &baseline::Options,
     ) -> Result<Image> {
         let baseline::Options { width, height, ambient, shadows } = *options;
-        let options = Options { width, height, ambient, shadows };
+        let options = Options { width, height, ambient, shadows, ..Options::default() };
         self.render(voxels, camera, light, background, &options)
     }
 
     /// Renders the uploaded grid from `camera`: what
     /// [`voxlod_cpu::render::filtered::render`] returns for it (linear RGB with the background
     /// composited, alpha = coverage), with the same errors for bad options, camera, light,
-    /// ambient term or background.
+    /// ambient term or background. The kernel follows the default chord and pixel pattern only:
+    /// [`Options::vjk_chord`] other than `PerRay` or [`Options::pattern`] other than `Fixed` is
+    /// [`Error::Unsupported`], naming the option.
     pub fn render(
         &self,
         app: &GpuRecords,
@@ -171,6 +173,7 @@ impl<'a> FilteredKernel<'a> {
     ) -> Result<Image> {
         let ctx = self.ctx;
         let light = check_frame(camera, light, background, options)?;
+        check_gpu_options(options)?;
         let Options { width, height, .. } = *options;
         let (lx, ly) =
             ctx.image_dispatch("filtered image edge (workgroups of 8 pixels)", width, height)?;
@@ -185,6 +188,23 @@ impl<'a> FilteredKernel<'a> {
         ctx.dispatch("rendering filtered records", &self.pipeline, &buffers, (lx, ly))?;
         read_image(ctx, &out, width, height)
     }
+}
+
+/// The options the kernel does not follow: an [`Error::Unsupported`] naming the first.
+pub fn check_gpu_options(options: &Options) -> Result<()> {
+    if options.vjk_chord != VjkChord::PerRay {
+        return Err(Error::Unsupported {
+            what: "filtered::Options::vjk_chord other than VjkChord::PerRay (a [VJK21] chord \
+                   cached per voxel) in the GPU filtered renderer",
+        });
+    }
+    if options.pattern != PixelPattern::Fixed {
+        return Err(Error::Unsupported {
+            what: "filtered::Options::pattern other than PixelPattern::Fixed (jittered pixel \
+                   patterns) in the GPU filtered renderer",
+        });
+    }
+    Ok(())
 }
 
 /// Reads a `width × height` image of `vec4<f32>` pixels back.

@@ -34,14 +34,15 @@ pub struct GpuFilteredParams {
     pub light_b: [f32; 4],
     /// Grid origin (`f32`); `w` = voxel size.
     pub grid: [f32; 4],
-    /// Grid dimensions; `w` = flags (1: shadows, 2: point light).
+    /// Grid dimensions; `w` = flags (1: shadows, 2: point light, 4: Averages normal as stored).
     pub dims: [u32; 4],
     /// Width, height, the DDA step bound, 0.
     pub size: [u32; 4],
     /// Bricks per axis, 0.
     pub brick_dims: [u32; 4],
     /// Virtual-mesh and Adaptive grids ([`voxels`](super::voxels)): directional-opacity rule (0
-    /// Lines, 1 Circles), shading samples per distribution face, projected-area scaling (0/1), and
+    /// Lines, 1 Circles), shading samples per distribution face, flags (1 projected-area scaling,
+    /// 2 the unshaded fallback), and
     /// the number of voxels with a record. Zero for the other kinds.
     pub vmesh: [u32; 4],
 }
@@ -99,7 +100,7 @@ pub(super) fn frame_params(
     background: Vec3,
     options: &Options,
 ) -> GpuFilteredParams {
-    let Options { width, height, ambient, shadows } = *options;
+    let Options { width, height, ambient, shadows, .. } = *options;
     let frame = camera.frame(width, height);
     let grid = app.grid;
     let eye_grid = ((camera.eye.as_dvec3() - grid.origin) / grid.voxel_size).as_vec3();
@@ -118,7 +119,13 @@ pub(super) fn frame_params(
         light_a: la.extend(0.0).to_array(),
         light_b: lb.extend(0.0).to_array(),
         grid: grid.origin.as_vec3().extend(grid.voxel_size as f32).to_array(),
-        dims: dims.extend(u32::from(shadows) | if point { 2 } else { 0 }).to_array(),
+        dims: dims
+            .extend(
+                u32::from(shadows)
+                    | if point { 2 } else { 0 }
+                    | if app.averages_as_stored { 4 } else { 0 },
+            )
+            .to_array(),
         size: [width, height, steps, app.kind as u32],
         brick_dims: brick_dims.extend(0).to_array(),
         vmesh: app.voxels.as_ref().map_or([0; 4], |v| v.params),

@@ -3,6 +3,7 @@
 //! behind the brick look-up ([`GpuRecords`]).
 
 use glam::Vec3;
+use voxlod_cpu::appearance::averages::{AveragesGrid, AveragesNormal};
 use voxlod_cpu::appearance::{AppearanceGrid, RecordAppearance, record_material};
 use voxlod_cpu::render::baseline::BaselineVoxel;
 use voxlod_cpu::render::filtered::FrameCache;
@@ -23,6 +24,9 @@ pub struct GpuRecords {
     pub(super) records: wgpu::Buffer,
     /// Virtual-mesh and Adaptive grids: the buffers of the per-voxel passes.
     pub(super) voxels: Option<voxels::VoxelBuffers>,
+    /// Averages grids: shade with the mean normal as stored instead of flipping it toward
+    /// the viewer ([`AveragesNormal::AsStored`]; bit 4 of the kernel's flags).
+    pub(super) averages_as_stored: bool,
 }
 
 impl GpuRecords {
@@ -92,6 +96,15 @@ impl FilteredKernel<'_> {
     /// CPU's errors).
     pub fn upload_averages(&self, app: &AppearanceGrid<AverageRecord>) -> Result<GpuRecords> {
         self.upload(app, RecordKind::Averages, GpuRecord::averages)
+    }
+
+    /// Uploads an Averages grid with its normal rule ([`AveragesGrid::normal`]: flipped toward
+    /// the viewer, or as stored, both mirrored by the kernel), with the checks of
+    /// [`FilteredKernel::upload_averages`].
+    pub fn upload_averages_grid(&self, app: &AveragesGrid) -> Result<GpuRecords> {
+        let mut records = self.upload_averages(&app.grid)?;
+        records.averages_as_stored = app.normal == AveragesNormal::AsStored;
+        Ok(records)
     }
 
     /// Uploads a \[VJK21\] (SGGX) grid, with the checks of [`FilteredKernel::upload_averages`].
@@ -164,6 +177,7 @@ impl FilteredKernel<'_> {
             slots: ctx.storage_array("record slots", &slots)?,
             records: ctx.storage_array("filtered records", &records)?,
             voxels: None,
+            averages_as_stored: false,
         })
     }
 }

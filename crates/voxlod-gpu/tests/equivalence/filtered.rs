@@ -25,16 +25,24 @@
 //!   step except where it straddles a rounding boundary — within the same bound. Measured on
 //!   lavapipe: 0 pixels over 1 step, and no pixel differs at all in 8-bit sRGB.
 //! - Bad input (a zero-sized image, a NaN light) gets the CPU path's error, word for word.
+//! - **Averages with the normal as stored** (`AveragesNormal::AsStored`, the authors' choice;
+//!   kernel flag 4): the same cases and bounds, with a control on the CPU row (on the sunlit
+//!   case without shadows the flipping render must fail the GPU bound against it, so the
+//!   cases show lit voxels seen from behind their mean normal). The authors' other choices have no kernel: their uploads and render
+//!   options are refused with an error naming the option (checked here too).
 
 use std::path::Path;
 use std::sync::OnceLock;
 
 use glam::Vec3;
+use voxlod_cpu::appearance::averages::{AveragesGrid, AveragesNormal};
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod_cpu::appearance::{Appearance, AppearanceGrid, averages, sggx};
 use voxlod_cpu::render::baseline::{self, BaselineVoxel};
-use voxlod_cpu::render::filtered::{FrameCache, Options, render, render_uncached};
+use voxlod_cpu::render::filtered::{
+    FrameCache, Options, PixelPattern, VjkChord, render, render_uncached,
+};
 use voxlod_cpu::voxelize::{self, voxelize};
 use voxlod_format::records::{AverageRecord, SggxRecord};
 use voxlod_format::{BrickMap, GridSpec};
@@ -103,7 +111,7 @@ fn voxel_count(kind: RecordKind) -> usize {
 /// The baseline renderer's CPU image, on the current rayon pool.
 fn cpu_baseline(camera: &Camera, light: &Light, bg: Vec3, o: &Options) -> Result<Image, String> {
     let f = fixture();
-    let Options { width, height, ambient, shadows } = *o;
+    let Options { width, height, ambient, shadows, .. } = *o;
     let options = baseline::Options { width, height, ambient, shadows };
     baseline::render(&f.grid, &f.baseline, camera, light, bg, &options).map_err(|e| e.to_string())
 }
@@ -193,7 +201,8 @@ pub fn cases() -> Vec<(&'static str, Camera, Light, Options)> {
         irradiance: Vec3::splat(3.0),
     };
     let point = Light::Point { position: hi + (hi - lo) * 0.3, intensity: Vec3::splat(2.0) };
-    let base = Options { width: SIZE, height: SIZE, ambient: Vec3::splat(0.05), shadows: true };
+    let base =
+        Options { width: SIZE, height: SIZE, ambient: Vec3::splat(0.05), ..Options::default() };
     vec![
         ("filtered-sun-shadows", camera, sun, base),
         ("filtered-sun-no-shadows", camera, sun, Options { shadows: false, ..base }),
@@ -262,6 +271,93 @@ fn shadow_control(bg: Vec3, kind: RecordKind) -> Result<Measure, String> {
     Ok(m)
 }
 
+/// The Averages grid with its normal as stored.
+fn as_stored() -> &'static AveragesGrid {
+    static G: OnceLock<AveragesGrid> = OnceLock::new();
+    G.get_or_init(|| AveragesGrid {
+        grid: fixture().averages.clone(),
+        normal: AveragesNormal::AsStored,
+    })
+}
+
+/// Averages with the normal as stored: see the module docs.
+pub fn averages_as_stored_scenes(backend: &Executor) -> Result<Measure, String> {
+    let g = as_stored();
+    let layout = &g.grid.records;
+    let bg = Vec3::new(0.1, 0.2, 0.3);
+    let err = |e: voxlod_cpu::Error| e.to_string();
+    let mut measures = Vec::new();
+    for (name, camera, light, options) in cases() {
+        let name = format!("averages-as-stored-{name}");
+        let mut cache = FrameCache::with_layout(g, layout).map_err(err)?;
+        let expected = render(&mut cache, &camera, &light, bg, &options).map_err(err)?;
+        let m = match backend {
+            Executor::Cpu => {
+                let u = render_uncached(&cache, &camera, &light, bg, &options).map_err(err)?;
+                let m = compare(&name, &u, &expected, EXACT);
+                if !name.ends_with("sun-no-shadows") {
+                    m
+                } else {
+                    // Control, on the sunlit case without shadows (the point light sits where
+                    // few voxels seen from behind are lit): the flipping render differs beyond
+                    // the GPU bound.
+                    let flipped = cpu(RecordKind::Averages, &camera, &light, bg, &options)?;
+                    let mut c = compare(&format!("{name}-control"), &flipped, &expected, GPU_BOUND);
+                    c.pass = !c.pass;
+                    c.max_error = 0.0;
+                    c.bound = 0.0;
+                    c.note = format!(
+                        "control, flipped vs as stored must fail the GPU bound: {}",
+                        c.note
+                    );
+                    Measure::combine(&[m, c])
+                }
+            }
+            Executor::Gpu(ctx) => {
+                let k = FilteredKernel::new(ctx).map_err(|e| e.to_string())?;
+                let up = k.upload_averages_grid(g).map_err(|e| e.to_string())?;
+                let actual =
+                    k.render(&up, &camera, &light, bg, &options).map_err(|e| e.to_string())?;
+                let slug = format!("{name}-{}", crate::ground_truth::backend_slug(backend));
+                compare(&slug, &actual, &expected, GPU_BOUND)
+            }
+        };
+        measures.push(m);
+    }
+    if let Executor::Gpu(ctx) = backend {
+        measures.push(refusals(&FilteredKernel::new(ctx).map_err(|e| e.to_string())?)?);
+    }
+    Ok(Measure::combine(&measures))
+}
+
+/// The render options the kernel does not follow are errors naming them.
+fn refusals(k: &FilteredKernel<'_>) -> Result<Measure, String> {
+    let (_, camera, light, options) = cases().remove(0);
+    let up = upload(k, RecordKind::Vjk21)?;
+    let refused = [
+        (Options { vjk_chord: VjkChord::CachedChord, ..options }, "vjk_chord"),
+        (Options { vjk_chord: VjkChord::CachedAlpha, ..options }, "vjk_chord"),
+        (Options { pattern: PixelPattern::Jittered { seed: 1 }, ..options }, "pattern"),
+    ];
+    let mut differ = Vec::new();
+    for (o, field) in refused {
+        match k.render(&up, &camera, &light, Vec3::ZERO, &o) {
+            Err(e) if e.to_string().contains(field) => {}
+            other => differ.push(format!("{field}: got {:?}", other.map(|_| "an image"))),
+        }
+    }
+    Ok(Measure {
+        max_error: differ.len() as f64,
+        bound: 0.0,
+        pass: differ.is_empty(),
+        note: if differ.is_empty() {
+            "3 authors' render options: errors naming them".into()
+        } else {
+            differ.join("; ")
+        },
+    })
+}
+
 /// Bad input gets the CPU path's errors.
 fn bad_input(k: &FilteredKernel<'_>, kind: RecordKind) -> Result<Measure, String> {
     let (_, camera, light, options) = cases().remove(0);
@@ -328,7 +424,13 @@ fn property(backend: &Executor, kind: RecordKind) -> Result<Measure, String> {
         let camera = Camera::framing(dir, (lo + hi) * 0.5, radius * zoom, fov);
         let light =
             Light::Directional { to_light: to_light.normalize(), irradiance: Vec3::splat(2.0) };
-        let options = Options { width: 32, height: 32, ambient: Vec3::splat(0.05), shadows };
+        let options = Options {
+            width: 32,
+            height: 32,
+            ambient: Vec3::splat(0.05),
+            shadows,
+            ..Default::default()
+        };
         let expected = cpu(kind, &camera, &light, bg, &options).map_err(TestCaseError::fail)?;
         let m = match (&kernel, &uploaded) {
             (Some(k), Some(up)) => {

@@ -62,6 +62,10 @@ const KERNELS: &[Kernel] = &[
     Kernel { name: "ground truth (dispatches)", body: ground_truth::dispatch_split },
     Kernel { name: "filtered Averages (scenes)", body: filtered::averages_scenes },
     Kernel { name: "filtered Averages (proptest)", body: filtered::averages_property },
+    Kernel {
+        name: "filtered Averages as stored (scenes)",
+        body: filtered::averages_as_stored_scenes,
+    },
     Kernel { name: "filtered VJK21 (scenes)", body: filtered::vjk21_scenes },
     Kernel { name: "filtered VJK21 (proptest)", body: filtered::vjk21_property },
     Kernel { name: "baseline voxels (scenes)", body: filtered::baseline_scenes },

@@ -54,18 +54,20 @@ pub const GPU_BOUND: ImageBound = ImageBound { per_pixel: 2, fraction: 0.99 };
 /// The Adaptive threshold of the fixture (chosen so that every kind holds a share).
 const THRESHOLD: f32 = 0.08;
 
-/// The virtual-mesh variants: Lines, Circles, Lines × projected area, and Lines with a
-/// specular side record on every voxel (the bunny has none: this exercises the specular lobe).
-const VARIANTS: [(&str, DirectionalRule, bool); 4] = [
+/// The virtual-mesh variants: Lines, Circles, Lines × projected area, Lines with a specular
+/// side record on every voxel (the bunny has none: this exercises the specular lobe), and Lines
+/// with the authors' unshaded fallback (`ShadingFallback::Unshaded`).
+const VARIANTS: [(&str, DirectionalRule, bool); 5] = [
     ("lines", DirectionalRule::Lines, false),
     ("circles", DirectionalRule::Circles, false),
     ("lines-area", DirectionalRule::Lines, true),
     ("lines-specular", DirectionalRule::Lines, false),
+    ("lines-unshaded", DirectionalRule::Lines, false),
 ];
 
 struct Fixture {
     scene: Scene,
-    vmesh: [VirtualMeshGrid; 4],
+    vmesh: [VirtualMeshGrid; 5],
     adaptive: AdaptiveGrid,
 }
 
@@ -89,6 +91,7 @@ fn fixture() -> &'static Fixture {
         });
         let n = records.records.len();
         vmesh[3].grid.specular = Some(vec![SpecularRecord::new(0.4, 24.0); n]);
+        vmesh[4].fallback = voxlod_cpu::appearance::virtual_mesh::ShadingFallback::Unshaded;
         let options = AdaptiveOptions { rays: 32, heldout: 64, ..Default::default() };
         let candidates = Candidates::build(&ctx, &options).expect("Adaptive candidates");
         let adaptive = candidates.select(THRESHOLD).expect("an Adaptive grid");
@@ -96,7 +99,7 @@ fn fixture() -> &'static Fixture {
     })
 }
 
-/// What a row renders: virtual-mesh variant `0..3`, or the Adaptive grid.
+/// What a row renders: virtual-mesh variant `0..5`, or the Adaptive grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Grid {
     Vmesh(usize),
@@ -149,10 +152,30 @@ pub fn vmesh_scenes(backend: &Executor) -> Result<Measure, String> {
     let mut runs: Vec<(Grid, &'static str, Camera, Light, Options)> =
         cases().into_iter().map(|(n, c, l, o)| (Grid::Vmesh(0), n, c, l, o)).collect();
     let (_, camera, sun, options) = cases().remove(0);
-    for v in 1..4 {
+    for v in 1..VARIANTS.len() {
         runs.push((Grid::Vmesh(v), "filtered-sun-shadows", camera, sun, options));
     }
-    scenes_body(backend, Grid::Vmesh(0), runs)
+    let body = scenes_body(backend, Grid::Vmesh(0), runs)?;
+    match backend {
+        Executor::Cpu => Ok(Measure::combine(&[body, fallback_control()?])),
+        Executor::Gpu(_) => Ok(body),
+    }
+}
+
+/// A control on the CPU row: the sun case with our fallback and with the authors' unshaded
+/// one must differ by more than the GPU bound allows (so the case reaches the fallback the
+/// kernel mirrors).
+fn fallback_control() -> Result<Measure, String> {
+    let (_, camera, sun, options) = cases().remove(0);
+    let bg = Vec3::new(0.1, 0.2, 0.3);
+    let a = Grid::Vmesh(0).cpu(&camera, &sun, bg, &options)?;
+    let b = Grid::Vmesh(4).cpu(&camera, &sun, bg, &options)?;
+    let mut m = compare("vmesh-fallback-control", &a, &b, GPU_BOUND);
+    m.pass = !m.pass;
+    m.max_error = 0.0;
+    m.bound = 0.0;
+    m.note = format!("control, ours vs unshaded fallback must fail the GPU bound: {}", m.note);
+    Ok(m)
 }
 
 pub fn adaptive_scenes(backend: &Executor) -> Result<Measure, String> {
@@ -331,7 +354,13 @@ fn property(backend: &Executor, grids: &[Grid]) -> Result<Measure, String> {
         let camera = Camera::framing(dir, (lo + hi) * 0.5, radius * zoom, fov);
         let light =
             Light::Directional { to_light: to_light.normalize(), irradiance: Vec3::splat(2.0) };
-        let options = Options { width: 32, height: 32, ambient: Vec3::splat(0.05), shadows };
+        let options = Options {
+            width: 32,
+            height: 32,
+            ambient: Vec3::splat(0.05),
+            shadows,
+            ..Default::default()
+        };
         let grid = grids[g];
         let expected = grid.cpu(&camera, &light, bg, &options).map_err(TestCaseError::fail)?;
         let (m, actual) = match &kernel {

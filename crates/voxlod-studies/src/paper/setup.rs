@@ -122,7 +122,13 @@ pub(super) fn render_linear(
 ) -> Result<Image, Error> {
     let mut cache = filtered::FrameCache::new(grid)?;
     lighting::superpose(lights, ambient, background, |l, a, b| {
-        let options = filtered::Options { width: size, height: size, ambient: a, shadows: true };
+        let options = filtered::Options {
+            width: size,
+            height: size,
+            ambient: a,
+            shadows: true,
+            ..Default::default()
+        };
         Ok(filtered::render(&mut cache, camera, l, b, &options)?)
     })
 }

@@ -294,3 +294,110 @@ proptest! {
         }
     }
 }
+
+// The authors' rule (`DirectionalRule::Authors`), against values worked out by hand from
+// their `computeOcclusion` / `projectionKernel` / `circleIntersection`. Throughout, lengths are
+// in units of the window's pixel width `s = step_u`: the sub-cell circle has radius R = √2,
+// the pixel circle r = ½, so a pixel whose centre is within R − r = 0.914 of a projected
+// sub-cell centre is covered fully, one beyond R + r = 1.914 not at all, and in between the
+// lens area is A = ½r²(β − sin β) + ½R²(α − sin α) with α = 2 acos((R² + d² − r²)/(2Rd)) and
+// β = 2 acos((r² + d² − R²)/(2rd)); coverage = A/(πr²) = A/0.785398.
+
+fn one_cell(x: usize, y: usize, z: usize) -> [u8; 27] {
+    pattern(|a, b, c| (a, b, c) == (x, y, z))
+}
+
+/// The centre sub-cell (1,1,1) seen along ±x. The voxel projects to a unit square, so
+/// s = ¼ and the pixels are (i + ½)/4 from the window's corner; the centre projects to the
+/// window's middle, (2, 2) in pixels: exactly on a pixel corner, and the truncation puts it in
+/// pixel (2, 2), whose 3×3 neighbourhood is pixels 1..=3 on both axes.
+/// - Pixels (1,1), (1,2), (2,1), (2,2): d = √(½² + ½²) = 0.707 < 0.914, coverage 1.
+/// - Pixels (1,3), (2,3), (3,1), (3,2): d = √(½² + 1½²) = √2.5 = 1.5811; cos α = (2 + 2.5 −
+///   0.25)/(2·√2·1.5811) = 0.950329, α = 0.633011; cos β = (0.25 + 2.5 − 2)/(2·½·1.5811) =
+///   0.474342, β = 2.153161; A = 0.125(2.153161 − 0.835202) + 1.0(0.633011 − 0.591575) =
+///   0.164749 + 0.041436 = 0.206185; coverage 0.262523.
+/// - Pixel (3,3): d = √(2·1.5²) = 2.121 > 1.914, nothing; the 7 pixels of row or column 0
+///   are outside the 3×3 neighbourhood (pixel (0, 1) would be reached at d = 1.58, it is not
+///   visited).
+///
+/// Opacity = (4·1 + 4·0.262523)/16 = 0.315631, from either side (the mirror image puts the
+/// centre in the same pixel, and the neighbourhood's partial pixels are the same four).
+#[test]
+fn authors_rule_one_centre_cell_along_an_axis() {
+    let alpha = one_cell(1, 1, 1);
+    for dir in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::Z] {
+        let got = directional_opacity(&alpha, dir, DirectionalRule::Authors);
+        assert!((got - 0.315_631).abs() < 2e-5, "{dir}: {got}");
+    }
+    // Not normalized and a larger circle: more than the paper's normalized circles give.
+    let circles = directional_opacity(&alpha, Vec3::X, DirectionalRule::Circles);
+    assert!(circles < 0.25, "circles {circles}");
+}
+
+/// The corner sub-cell (0,0,0) seen along +z (the authors' ray travels along −z): with
+/// r = (0,0,−1) the Hughes–Möller basis is u = (−1,0,0), v = (0,1,0); relative to the voxel
+/// centre the cell's centre (−⅓, −⅓) in (x, y) projects to (u, v) = (⅓, −⅓), the window is
+/// [−½, ½]², s = ¼, so in pixels it sits at (3.333, 0.667): pixel (3, 0), neighbourhood
+/// columns 2..=3, rows 0..=1.
+/// - (3,0): offsets (0.167, 0.167), d = 0.236, coverage 1.
+/// - (2,0) and (3,1): offsets (0.833, 0.167), d = 0.850 < 0.914, coverage 1.
+/// - (2,1): offsets (0.833, 0.833), d = 1.1785; cos α = (2 + 1.388889 − 0.25)/(2·√2·1.1785) =
+///   0.941667, α = 0.686495; cos β = (0.25 + 1.388889 − 2)/(2·½·1.1785) = −0.306413,
+///   β = 3.764437; A = 0.125(3.764437 + 0.583659) + (0.686495 − 0.633830) = 0.543473 +
+///   0.052665 = 0.596138; coverage 0.759027.
+///
+/// Opacity = (3 + 0.759027)/16 = 0.234939.
+#[test]
+fn authors_rule_one_corner_cell_along_an_axis() {
+    let got = directional_opacity(&one_cell(0, 0, 0), Vec3::Z, DirectionalRule::Authors);
+    assert!((got - 0.234_939).abs() < 2e-5, "{got}");
+    // At half opacity every covered pixel keeps half: not normalized, linear in α.
+    let half = pattern(|x, y, z| (x, y, z) == (0, 0, 0)).map(|a| a / 2);
+    let got = directional_opacity(&half, Vec3::Z, DirectionalRule::Authors);
+    assert!((got - 0.234_939 * 127.0 / 255.0).abs() < 2e-5, "{got}");
+}
+
+/// The sub-cell (0,2,0) seen along the body diagonal d = (1,1,1)/√3 (ray r = −d). The basis
+/// of r: |r_x| = |r_z|, so v = normalize(0, −r_z, r_y) = (0, 1, −1)/√2 and u = v × r =
+/// (−2, 1, 1)/√6. The corners project to a hexagon whose bounding window is
+/// u ∈ ±2/√6 = ±0.816497, v ∈ ±1/√2 = ±0.707107: a rectangle, s = step_u = 0.408248,
+/// step_v = 0.353553 = 0.866 s; R = √2·s = 0.577350, r = s/2 = 0.204124. The cell centre,
+/// (−⅓, ⅓, −⅓) from the voxel centre, projects to u = (⅔ + ⅓ − ⅓)/√6 = 0.272166,
+/// v = (⅓ + ⅓)/√2 = 0.471405; in window pixels ((0.272166 + 0.816497)/s,
+/// (0.471405 + 0.707107)/step_v) = (2.667, 3.333): pixel (2, 3), neighbourhood columns 1..=3,
+/// rows 2..=3. Offsets from the pixel centres in units of s (rows are 0.866 s apart):
+/// - (2,3): offsets (0.167, −0.167·0.866), d = 0.2205, coverage 1;
+/// - (2,2): (0.167, 0.833·0.866), d = 0.7407, coverage 1; (3,3): (−0.833, −0.144), d =
+///   0.8457, coverage 1;
+/// - (1,2): (1.167, 0.722), d = 1.3718; cos α = 0.936032, α = 0.719231; cos β = 0.096181,
+///   β = 2.948934; A = 0.344683 + 0.060425 = 0.405108; coverage 0.515799;
+/// - (1,3): (1.167, −0.144), d = 1.1756; α = 0.684862, β = 3.778481; A = 0.546647 +
+///   0.052296 = 0.598943; coverage 0.762598;
+/// - (3,2): (−0.833, 0.722), d = 1.1024; α = 0.628655, β = 4.154443; A = 0.625349 +
+///   0.040597 = 0.665946; coverage 0.847909.
+///
+/// Opacity = (3 + 0.515799 + 0.762598 + 0.847909)/16 = 0.320394, the same for the opposite
+/// diagonal (the mirror image, no centre on a pixel boundary).
+#[test]
+fn authors_rule_one_cell_along_a_diagonal() {
+    let alpha = one_cell(0, 2, 0);
+    for dir in [Vec3::ONE, Vec3::NEG_ONE] {
+        let got = directional_opacity(&alpha, dir, DirectionalRule::Authors);
+        assert!((got - 0.320_394).abs() < 2e-5, "{dir}: {got}");
+    }
+}
+
+/// No normalization: a uniform subgrid of opacity α gives α itself where every pixel is
+/// covered fully, which the large sub-cell circles achieve from every test direction; an
+/// empty one gives 0.
+#[test]
+fn authors_rule_is_alpha_on_uniform_subgrids() {
+    for dir in test_directions() {
+        for a in [255u8, 128, 1] {
+            let got = directional_opacity(&[a; 27], dir, DirectionalRule::Authors);
+            let want = a as f32 / 255.0;
+            assert!((got - want).abs() < 1e-6, "{dir}, α {a}: {got}");
+        }
+        assert_eq!(directional_opacity(&[0; 27], dir, DirectionalRule::Authors), 0.0);
+    }
+}

@@ -373,3 +373,82 @@ proptest! {
         prop_assert!(r.max_element() <= 0.9 * (2.0 / PI + ambient) + 1e-4, "{}", r);
     }
 }
+
+/// The authors' random face sampling: deterministic per record, seed and view; another seed
+/// draws other points; 40 random samples land near the converged (256 fixed points) value;
+/// faces without a distribution are not sampled, so they shade the same either way.
+#[test]
+fn random_face_sampling_is_seeded_and_converges() {
+    let ns = cap(Vec3::new(-0.3, 0.2, 1.0), 1.0, 150);
+    let rec = fit(&hits(&ns, |_| Vec3::splat(0.8))).unwrap();
+    assert!(rec.distribution != 0, "a curved cap gives distribution faces");
+    let params = |seed| VirtualMeshParams {
+        samples_per_face: AUTHORS_SAMPLES_PER_FACE,
+        sampling: FaceSampling::authors(seed),
+        ..Default::default()
+    };
+    let (mut worst, mut differ) = (0.0f32, 0);
+    for i in 0..40 {
+        let v = Vec3::new(rand_f32(9, i, 0) - 0.5, rand_f32(9, i, 1) - 0.5, rand_f32(9, i, 2))
+            .normalize();
+        let shade = |p: &VirtualMeshParams| {
+            shade_record_with(&rec, None, v, &light(), 1.0, Vec3::splat(0.05), p)
+        };
+        let a = shade(&params(1));
+        assert_eq!(a, shade(&params(1)), "view {i}: the same seed draws the same points");
+        differ += (a != shade(&params(2))) as u32;
+        let converged = shade_record(&rec, None, v, &light(), 1.0, Vec3::splat(0.05), 256);
+        worst = worst.max((a - converged).abs().max_element() / converged.max_element().max(0.05));
+    }
+    assert!(differ >= 30, "another seed changes the value in {differ} of 40 views");
+    assert!(worst > 0.0 && worst < 0.08, "relative difference 40 random vs 256 fixed: {worst}");
+
+    // A flat voxel has one fixed-set face: no sampling, the same value bit for bit.
+    let flat = fit(&hits(&[Vec3::Z; 8], |_| Vec3::splat(0.5))).unwrap();
+    assert_eq!(flat.distribution, 0);
+    let v = Vec3::new(0.2, 0.1, 1.0).normalize();
+    assert_eq!(
+        shade_record_with(&flat, None, v, &light(), 1.0, Vec3::ZERO, &params(3)),
+        shade_record(&flat, None, v, &light(), 1.0, Vec3::ZERO, 16),
+    );
+}
+
+/// A record key depends on every byte: records that differ in one opacity byte get other keys.
+#[test]
+fn record_keys_differ_between_records() {
+    let rec = fit(&hits(&cap(Vec3::Z, 0.8, 60), |_| Vec3::ONE)).unwrap();
+    let mut other = rec;
+    other.opacity[13] ^= 1;
+    assert_ne!(record_key(&rec), record_key(&other));
+    assert_eq!(record_key(&rec), record_key(&rec.clone()));
+}
+
+/// Seen from where no stored normal faces the viewer, ours shades with every stored normal,
+/// the authors' leave the voxel unshaded (black), through the grid as through the function.
+#[test]
+fn fallback_when_no_normal_faces_the_viewer() {
+    let mut rec = VirtualMeshRecord {
+        axes: [[127, 0, 0], [0, 127, 0], [0, 0, 127]],
+        scales: [SCALE_RANGE.encode(0.5); 3],
+        ..Default::default()
+    };
+    rec.colors[0] = [255; 3];
+    rec.normals[0][0] = encode_dir(Vec3::ONE.normalize());
+    let l = LightSample { to_light: Vec3::Y, distance: 1.0, irradiance: Vec3::splat(PI) };
+    let ambient = Vec3::splat(0.1);
+    let ours = shade_record(&rec, None, Vec3::NEG_Y, &l, 1.0, ambient, 16);
+    assert!(ours.x > 0.1, "ours: the stored normal, lit: {ours}");
+    let p = VirtualMeshParams { fallback: ShadingFallback::Unshaded, ..Default::default() };
+    assert_eq!(shade_record_with(&rec, None, Vec3::NEG_Y, &l, 1.0, ambient, &p), Vec3::ZERO);
+    // From the front both agree: the fallback is not reached.
+    let front = Vec3::new(0.2, 0.3, 1.0).normalize();
+    assert_eq!(
+        shade_record_with(&rec, None, front, &l, 1.0, ambient, &p),
+        shade_record(&rec, None, front, &l, 1.0, ambient, 16)
+    );
+    let grid = GridSpec::new(glam::DVec3::ZERO, 1.0, UVec3::ONE).unwrap();
+    let records = BrickMap::from_voxels(grid.dims, [(UVec3::ZERO, rec)]).unwrap();
+    let g = VirtualMeshGrid::with_params(AppearanceGrid { grid, records, specular: None }, p);
+    assert_eq!(g.params(), p);
+    assert_eq!(g.radiance(0, Vec3::NEG_Y, &l, 1.0, ambient), Vec3::ZERO);
+}

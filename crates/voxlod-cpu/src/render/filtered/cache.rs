@@ -75,6 +75,8 @@ pub(super) struct ViewKey {
     pub light: Light,
     pub ambient: Vec3,
     pub shadows: bool,
+    /// The \[VJK21\] chord rule: it changes cached opacities and hence visibilities.
+    pub vjk_chord: super::VjkChord,
 }
 
 /// The slots, shared by the threads of a frame.
@@ -229,7 +231,8 @@ pub struct FrameCache<'a, A: ?Sized> {
     pub(super) lookup: VoxelLookup,
     pub(super) slots: Slots,
     view_key: Option<ViewKey>,
-    shadow_light: Option<Light>,
+    /// The light (and \[VJK21\] chord rule) the shadow slots were computed for.
+    shadow_light: Option<(Light, super::VjkChord)>,
     /// Shadow-ray bounds and step pattern of `shadow_light`, if it is directional.
     pub(super) light_bounds: Option<LightBounds>,
     pub(super) shadow_pattern: Option<ShadowPattern>,
@@ -395,11 +398,11 @@ impl<'a, A: Appearance + ?Sized> FrameCache<'a, A> {
             self.slots.next_generation();
             self.view_key = Some(key);
         }
-        if key.shadows && self.shadow_light != Some(key.light) {
+        if key.shadows && self.shadow_light != Some((key.light, key.vjk_chord)) {
             if self.shadow_light.is_some() {
                 self.slots.clear_light();
             }
-            self.shadow_light = Some(key.light);
+            self.shadow_light = Some((key.light, key.vjk_chord));
             self.light_bounds = light_bounds(&key.light, &self.lookup.map, &self.grid);
             self.shadow_pattern = shadow_pattern(&key.light, &self.grid);
         }

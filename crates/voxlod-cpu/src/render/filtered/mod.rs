@@ -4,7 +4,10 @@
 //!
 //! # Rules
 //! - **Camera rays.** 4 per pixel through the fixed sub-pixel pattern [`PATTERN_4`], box
-//!   filtered; each walks the grid with the brick-skipping [`Dda`] from the eye.
+//!   filtered; each walks the grid with the brick-skipping [`Dda`] from the eye. With
+//!   [`PixelPattern::Jittered`] the 4 rays are a jittered 2×2 grid drawn per pixel from a seed
+//!   instead ([`stratified`] with the jitter of [`Streams`]), the paper's "precomputed jittered
+//!   patterns" (§4) made reproducible.
 //! - **Per-voxel values.** For a voxel with a record, its radiance and opacity are those for
 //!   `v = normalize(eye − centre)` (the direction from the voxel centre to the camera, `+z`
 //!   if the eye is at the centre), computed once per voxel and frame and cached: every ray
@@ -14,7 +17,9 @@
 //!   then `C += (T − T')·radiance`, `T ← T'`. For [`Opacity::Alpha`] that is `C += T·α·c`,
 //!   `T ← T(1 − α)`; for [`Opacity::NonExponential`] it is the \[VJK21\] update
 //!   `T ← min(T, f(f⁻¹(T, γ) + σℓ, γ))`, whose chord is per ray (only σ and γ are cached). In a
-//!   mixed grid each voxel applies its own update to the running `T`. The walk stops as soon
+//!   mixed grid each voxel applies its own update to the running `T`. [`VjkChord`] chooses a
+//!   chord cached per voxel instead (the chord of the line through the voxel centre along the
+//!   cached direction), as the paper caches every method's opacity per voxel (§4). The walk stops as soon
 //!   as `T < 0.001` or the ray leaves the grid; the ray's colour is `C + T·background` and its
 //!   alpha (coverage) `1 − T`.
 //! - **Shadows.** A voxel's visibility is the final transmittance of one ray from its centre
@@ -64,9 +69,9 @@ use voxlod_scene::{Camera, Image, Light};
 
 use super::bricks::BrickLookup;
 use super::dda::{Dda, DdaVoxel};
-use super::pixel_samples::PATTERN_4;
+use super::pixel_samples::{PATTERN_4, Streams, stratified};
 use super::{check_colour, check_image_size};
-use crate::appearance::{Appearance, Opacity};
+use crate::appearance::{Appearance, Opacity, transmittance};
 use crate::{Error, Result};
 use bounds::{LightBounds, ScreenTiles};
 use cache::{Slots, ViewKey, light_bounds, shadow_pattern};
@@ -85,11 +90,76 @@ pub struct Options {
     pub ambient: Vec3,
     /// Whether to trace voxel shadow rays (off: every voxel sees the light).
     pub shadows: bool,
+    /// The chord a \[VJK21\] voxel ([`Opacity::NonExponential`]) is evaluated with; the other
+    /// opacities do not depend on it.
+    pub vjk_chord: VjkChord,
+    /// Where the 4 rays of a pixel go.
+    pub pattern: PixelPattern,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { width: 512, height: 512, ambient: Vec3::ZERO, shadows: true }
+        Self {
+            width: 512,
+            height: 512,
+            ambient: Vec3::ZERO,
+            shadows: true,
+            vjk_chord: VjkChord::default(),
+            pattern: PixelPattern::default(),
+        }
+    }
+}
+
+/// The chord a \[VJK21\] voxel's non-exponential transmittance is evaluated with (Vicini,
+/// Jakob and Kaplanyan 2021; Brito, Poulin and Teichrieb 2023, §4 caches "shading and opacity"
+/// per voxel for every method).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum VjkChord {
+    /// Ours: each ray's exact chord through the voxel, `T ← min(T, f(f⁻¹(T, γ) + σℓ, γ))`.
+    #[default]
+    PerRay,
+    /// The same update with one chord per voxel and direction: `ℓ_c = 1/max|d_i|`, the chord of
+    /// the line through the voxel centre along the cached direction (toward the eye, or the
+    /// direction the light travels for shadow rays), for every ray through the voxel.
+    CachedChord,
+    /// The voxel's opacity cached as a plain alpha, `α = 1 − f(σ ℓ_c, γ)`, and composited as
+    /// every other alpha (`T ← T(1 − α)`): what a renderer that caches one opacity per voxel
+    /// does with \[VJK21\].
+    CachedAlpha,
+}
+
+/// Where the 4 camera rays of a pixel go.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum PixelPattern {
+    /// Ours: the fixed rotated-grid pattern [`PATTERN_4`], the same in every pixel.
+    #[default]
+    Fixed,
+    /// A 2×2 jittered grid per pixel: ray `k` at [`stratified`]`(k, 4, jitter)` with the
+    /// jitter of [`Streams::new`]`(seed)` for (pixel index `x + width·y`, `k`); another seed
+    /// gives an independent pattern.
+    Jittered {
+        /// Seed of the jitter.
+        seed: u32,
+    },
+}
+
+/// The chord in voxel units of the line through a voxel's centre along `d` (any length):
+/// `1/max|d̂_i|`, in `[1, √3]`; 1 for a zero or non-finite `d`.
+#[inline]
+pub fn centre_chord(d: Vec3) -> f32 {
+    let m = d.try_normalize().map_or(1.0, |d| d.abs().max_element());
+    (1.0 / m).clamp(1.0, 3f32.sqrt())
+}
+
+/// The opacity a voxel caches under `mode` for direction `d`: [`VjkChord::CachedAlpha`] turns
+/// a non-exponential opacity into the alpha of its centre chord; everything else is unchanged.
+#[inline]
+fn cached_opacity(opacity: Opacity, mode: VjkChord, d: Vec3) -> Opacity {
+    match (mode, opacity) {
+        (VjkChord::CachedAlpha, Opacity::NonExponential { sigma, gamma }) => {
+            Opacity::Alpha(1.0 - transmittance::f(sigma * centre_chord(d), gamma))
+        }
+        _ => opacity,
     }
 }
 
@@ -113,8 +183,13 @@ pub fn render<A: Appearance + ?Sized>(
     options: &Options,
 ) -> Result<Image> {
     let light = validate(cache, camera, light, background, options)?;
-    let key =
-        ViewKey { eye: camera.eye, light, ambient: options.ambient, shadows: options.shadows };
+    let key = ViewKey {
+        eye: camera.eye,
+        light,
+        ambient: options.ambient,
+        shadows: options.shadows,
+        vjk_chord: options.vjk_chord,
+    };
     cache.prepare(key);
     let cache = &*cache;
     let shadows =
@@ -253,13 +328,24 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
         let (width, height) = (self.options.width, self.options.height);
         let frame = camera.frame(width, height);
         let tiles = ScreenTiles::new(&frame, &self.lookup.map, self.grid);
+        let streams = match self.options.pattern {
+            PixelPattern::Fixed => Streams::new(0),
+            PixelPattern::Jittered { seed } => Streams::new(seed),
+        };
         let mut image = Image::new(width, height, Vec4::ZERO);
         image.pixels.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
                 let corner = Vec2::new(x as f32, y as f32);
                 let t_max = tiles.t_max(x as u32, y as u32);
                 let mut sum = Vec4::ZERO;
-                for offset in PATTERN_4 {
+                let pixel = x as u32 + width * y as u32;
+                for (k, fixed) in PATTERN_4.into_iter().enumerate() {
+                    let offset = match self.options.pattern {
+                        PixelPattern::Fixed => fixed,
+                        PixelPattern::Jittered { .. } => {
+                            stratified(k as u32, 4, streams.jitter(pixel, k as u32))
+                        }
+                    };
                     let r = match t_max {
                         Some(t) => self.trace(frame.eye, frame.ray_dir(corner + offset), t, lookup),
                         None => RayResult::MISS,
@@ -283,7 +369,12 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
                 Some(s) => s.view(index, || self.view(index, v.voxel, eye, lookup)),
                 None => self.view(index, v.voxel, eye, lookup),
             };
-            let chord = (v.t_exit - v.t_enter) * self.inv_size;
+            let chord = match (self.options.vjk_chord, opacity) {
+                (VjkChord::CachedChord, Opacity::NonExponential { .. }) => {
+                    centre_chord(eye - self.grid.voxel_center(v.voxel).as_vec3())
+                }
+                _ => (v.t_exit - v.t_enter) * self.inv_size,
+            };
             let t = opacity.apply(r.transmittance, chord);
             r.radiance += (r.transmittance - t) * radiance;
             r.transmittance = t;
@@ -319,7 +410,7 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
                 }
             };
         let radiance = self.app.radiance(index, to_eye, &light, visibility, ambient);
-        (radiance, self.app.opacity(index, to_eye))
+        (radiance, cached_opacity(self.app.opacity(index, to_eye), self.options.vjk_chord, to_eye))
     }
 
     /// The transmittance of the shadow ray of `voxel` (see the module docs): from the voxel's
@@ -334,7 +425,13 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
                 Some(s) => s.light_opacity(index, || self.light_opacity(index, at)),
                 None => self.light_opacity(index, at),
             };
-            t = opacity.apply(t, chord * self.inv_size);
+            let chord = match (self.options.vjk_chord, opacity) {
+                (VjkChord::CachedChord, Opacity::NonExponential { .. }) => {
+                    centre_chord(self.light_direction(at))
+                }
+                _ => chord * self.inv_size,
+            };
+            t = opacity.apply(t, chord);
             t >= MIN_TRANSMITTANCE
         };
         let start = voxel.as_vec3() + 0.5;
@@ -373,8 +470,14 @@ impl<A: Appearance + ?Sized> Frame<'_, A> {
     /// Opacity of voxel `voxel` (record `index`) for the direction the light travels at its
     /// centre.
     fn light_opacity(&self, index: usize, voxel: UVec3) -> Opacity {
+        let d = self.light_direction(voxel);
+        cached_opacity(self.app.opacity(index, d), self.options.vjk_chord, d)
+    }
+
+    /// The direction the light travels at `voxel`'s centre.
+    fn light_direction(&self, voxel: UVec3) -> Vec3 {
         let centre = self.grid.voxel_center(voxel).as_vec3();
-        self.app.opacity(index, -self.light.sample(centre).to_light)
+        -self.light.sample(centre).to_light
     }
 }
 

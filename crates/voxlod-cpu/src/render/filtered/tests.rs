@@ -385,7 +385,8 @@ fn floor_plate_post() -> TestApp {
 fn cached_frames_equal_uncached_ones_and_keep_what_they_may() {
     let a = floor_plate_post();
     let mut cache = FrameCache::new(&a).unwrap();
-    let options = Options { width: 40, height: 32, ambient: Vec3::splat(0.05), shadows: true };
+    let options =
+        Options { width: 40, height: 32, ambient: Vec3::splat(0.05), ..Options::default() };
     let cam1 = camera(Vec3::new(-12.0, 20.0, 30.0), Vec3::new(10.0, 2.0, 10.0));
     let turned = camera(cam1.eye, Vec3::new(8.0, 3.0, 12.0));
     let cam2 = camera(Vec3::new(30.0, 14.0, -6.0), Vec3::new(10.0, 2.0, 10.0));
@@ -450,7 +451,13 @@ fn untiled(f: &Frame<'_, TestApp>, camera: &Camera, lookup: &impl BrickLookup) -
 fn screen_tiles_skip_only_rays_that_meet_nothing() {
     let a = floor_plate_post();
     let cache = FrameCache::new(&a).unwrap();
-    let options = Options { width: 45, height: 37, ambient: Vec3::ZERO, shadows: false };
+    let options = Options {
+        width: 45,
+        height: 37,
+        ambient: Vec3::ZERO,
+        shadows: false,
+        ..Options::default()
+    };
     let lookup = cache.lookup.dense.as_ref().unwrap();
     let f = frame_of(&cache, UP_PI(), &options, false, PLAIN);
     let cameras = [
@@ -556,7 +563,8 @@ fn shadowed_voxels_get_ambient_only() {
         (c.y == 1 || plate).then(|| alpha(Vec3::ONE, 1.0)).flatten()
     });
     let mut cache = FrameCache::new(&a).unwrap();
-    let options = Options { width: 64, height: 64, ambient: Vec3::splat(0.1), shadows: true };
+    let options =
+        Options { width: 64, height: 64, ambient: Vec3::splat(0.1), ..Options::default() };
     let cam = camera(Vec3::new(-14.0, 24.0, 8.0), Vec3::new(8.0, 2.0, 8.0));
     let img = render(&mut cache, &cam, &UP_PI(), Vec3::ZERO, &options).unwrap();
     let at = |p: Vec3| {
@@ -647,3 +655,94 @@ fn bad_inputs_are_errors() {
 }
 
 const MAX_IMAGE_EDGE_PLUS_ONE: u32 = crate::render::MAX_IMAGE_EDGE + 1;
+
+/// The \[VJK21\] chord rules: each is cached and uncached alike, switching rules on one cache
+/// gives what a fresh cache gives, only non-exponential voxels change, and along an axis
+/// through voxel centres (every ray chord 1 = the centre chord) all three agree where
+/// compositing starts from T = 1 (the first voxel).
+#[test]
+fn vjk_chord_rules_cache_alike_and_change_only_vjk_voxels() {
+    let a = floor_plate_post();
+    let options =
+        Options { width: 40, height: 32, ambient: Vec3::splat(0.05), ..Options::default() };
+    let cam = camera(Vec3::new(-12.0, 20.0, 30.0), Vec3::new(10.0, 2.0, 10.0));
+    let light = sun(Vec3::new(0.3, 1.0, 0.2), PI);
+    let bg = Vec3::new(0.1, 0.2, 0.3);
+    let mut shared = FrameCache::new(&a).unwrap();
+    let mut images = Vec::new();
+    for rule in [VjkChord::PerRay, VjkChord::CachedChord, VjkChord::CachedAlpha, VjkChord::PerRay] {
+        let o = Options { vjk_chord: rule, ..options };
+        let img = render(&mut shared, &cam, &light, bg, &o).unwrap();
+        let mut fresh = FrameCache::new(&a).unwrap();
+        assert_eq!(img, render(&mut fresh, &cam, &light, bg, &o).unwrap(), "{rule:?}: fresh");
+        assert_eq!(img, render_uncached(&fresh, &cam, &light, bg, &o).unwrap(), "{rule:?}");
+        images.push(img);
+    }
+    assert_eq!(images[0], images[3], "back to per-ray chords");
+    let changed =
+        |i: usize| images[0].pixels.iter().zip(&images[i].pixels).filter(|(p, q)| p != q).count();
+    // The plate (σ = 2, γ = 0.3) covers roughly 40 of the 1280 pixels.
+    assert!(changed(1) > 10 && changed(2) > 10, "{} and {} pixels", changed(1), changed(2));
+    assert_ne!(images[1], images[2]);
+
+    // Alpha-only grids do not see the rule.
+    let alphas = app(UVec3::splat(6), |c| {
+        (c.y == 2).then(|| Voxel { albedo: colour_of(c), opacity: Opacity::Alpha(0.6) })
+    });
+    let mut cache = FrameCache::new(&alphas).unwrap();
+    let cam = camera(Vec3::new(-4.0, 9.0, 8.0), Vec3::splat(3.0));
+    let plain = render(&mut cache, &cam, &light, bg, &options).unwrap();
+    for rule in [VjkChord::CachedChord, VjkChord::CachedAlpha] {
+        let o = Options { vjk_chord: rule, ..options };
+        assert_eq!(render(&mut cache, &cam, &light, bg, &o).unwrap(), plain, "{rule:?}");
+    }
+
+    // Centre chords: 1 along an axis, √3 along a body diagonal, √2 along a face diagonal.
+    assert_eq!(centre_chord(Vec3::NEG_Y), 1.0);
+    assert!((centre_chord(Vec3::ONE) - 3f32.sqrt()).abs() < 1e-6);
+    assert!((centre_chord(Vec3::new(1.0, 0.0, -1.0)) - 2f32.sqrt()).abs() < 1e-6);
+    assert_eq!(centre_chord(Vec3::ZERO), 1.0);
+    // A single voxel seen along +z through its centre: T = f(σ·1, γ) under every rule.
+    let one = app(UVec3::ONE, |_| {
+        Some(Voxel {
+            albedo: Vec3::ONE,
+            opacity: Opacity::NonExponential { sigma: 1.5, gamma: 0.3 },
+        })
+    });
+    let want = crate::appearance::transmittance::f(1.5, 0.3);
+    for rule in [VjkChord::PerRay, VjkChord::CachedChord, VjkChord::CachedAlpha] {
+        let o = Options { vjk_chord: rule, shadows: false, ..options };
+        let cache = FrameCache::new(&one).unwrap();
+        let f = frame_of(&cache, light, &o, true, PLAIN);
+        let eye = Vec3::new(0.5, 0.5, -3.0);
+        let r = f.trace(eye, Vec3::Z, f32::INFINITY, cache.lookup.dense.as_ref().unwrap());
+        assert!((r.transmittance - want).abs() < 1e-6, "{rule:?}: {} vs {want}", r.transmittance);
+    }
+}
+
+/// A jittered pixel pattern: the same seed gives the same image, another seed another one,
+/// both differ from the fixed pattern, and cached equals uncached.
+#[test]
+fn jittered_pixel_patterns_are_seeded() {
+    let a = floor_plate_post();
+    let options = Options { width: 40, height: 32, ..Options::default() };
+    let cam = camera(Vec3::new(-12.0, 20.0, 30.0), Vec3::new(10.0, 2.0, 10.0));
+    let light = sun(Vec3::new(0.3, 1.0, 0.2), PI);
+    let mut cache = FrameCache::new(&a).unwrap();
+    let fixed = render(&mut cache, &cam, &light, Vec3::ZERO, &options).unwrap();
+    let jitter = |seed| {
+        let o = Options { pattern: PixelPattern::Jittered { seed }, ..options };
+        let mut cache = FrameCache::new(&a).unwrap();
+        let img = render(&mut cache, &cam, &light, Vec3::ZERO, &o).unwrap();
+        assert_eq!(img, render_uncached(&cache, &cam, &light, Vec3::ZERO, &o).unwrap());
+        img
+    };
+    let (one, again, two) = (jitter(1), jitter(1), jitter(2));
+    assert_eq!(one, again);
+    assert_ne!(one, two);
+    assert_ne!(one, fixed);
+    // Only edge pixels move: the mean coverage stays within a few percent.
+    let coverage = |img: &Image| img.pixels.iter().map(|p| p.w).sum::<f32>();
+    let (c0, c1) = (coverage(&fixed), coverage(&one));
+    assert!((c0 - c1).abs() < 0.05 * c0, "coverage {c0} vs {c1}");
+}

@@ -5,7 +5,7 @@
 //! shadow rays and shading as the single-pass kernel of [the parent module](super), with
 //! `vmesh.wgsl` porting [`voxlod_cpu::appearance::virtual_mesh::shade_record`] (the
 //! projected-area-weighted faces, the fixed Hammersley barycentric samples of distribution faces,
-//! the fallback) and [`voxlod_cpu::appearance::subgrid::directional_opacity`] (both rules, Lines
+//! the fallback, ours or the authors' unshaded one) and [`voxlod_cpu::appearance::subgrid::directional_opacity`] (both rules, Lines
 //! and Circles), times
 //! [`projected_area_ratio`](voxlod_cpu::appearance::virtual_mesh::projected_area_ratio) when
 //! [`VirtualMeshParams::projected_area`] is on. No random numbers are drawn: the CPU's virtual-mesh

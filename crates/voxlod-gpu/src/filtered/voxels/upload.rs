@@ -4,7 +4,9 @@
 
 use voxlod_cpu::appearance::adaptive::AdaptiveGrid;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
+use voxlod_cpu::appearance::virtual_mesh::{
+    FaceSampling, ShadingFallback, VirtualMeshGrid, VirtualMeshParams,
+};
 use voxlod_cpu::appearance::{AppearanceGrid, record_material};
 use voxlod_cpu::render::filtered::FrameCache;
 use voxlod_format::records::{AdaptiveRef, Kind};
@@ -18,8 +20,16 @@ use super::{
 use crate::{Error, Result};
 
 /// `Params.vmesh` words for `p` (the voxel count is filled in by the upload), or an error for
-/// a sample count the kernel does not take.
+/// a sample count the kernel does not take, or for a choice it has no code for (the authors'
+/// directional-opacity rule, random face sampling: [`Error::Unsupported`] naming the
+/// parameter). The third word holds flags: 1 projected-area scaling, 2 the unshaded fallback.
 fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
+    if p.sampling != FaceSampling::Stratified {
+        return Err(Error::Unsupported {
+            what: "VirtualMeshParams::sampling other than FaceSampling::Stratified (the \
+                   authors' random face samples) in the GPU filtered renderer",
+        });
+    }
     if p.samples_per_face > MAX_SAMPLES_PER_FACE {
         return Err(Error::TooLarge {
             what: "VirtualMeshParams::samples_per_face on the GPU (shading samples per face)",
@@ -30,8 +40,16 @@ fn vmesh_words(p: VirtualMeshParams) -> Result<[u32; 4]> {
     let rule = match p.rule {
         DirectionalRule::Lines => 0,
         DirectionalRule::Circles => 1,
+        DirectionalRule::Authors => {
+            return Err(Error::Unsupported {
+                what: "VirtualMeshParams::rule = DirectionalRule::Authors (the authors' \
+                       directional opacity) in the GPU filtered renderer",
+            });
+        }
     };
-    Ok([rule, p.samples_per_face, u32::from(p.projected_area), 0])
+    let unshaded = p.fallback == ShadingFallback::Unshaded;
+    let flags = u32::from(p.projected_area) | u32::from(unshaded) << 1;
+    Ok([rule, p.samples_per_face, flags, 0])
 }
 
 fn invalid(name: &'static str, value: String, reason: String) -> Error {
@@ -177,5 +195,19 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(vmesh_words(p).unwrap(), [1, 16, 1, 0]);
+    }
+
+    /// The authors' choices: the unshaded fallback is flag 2; their opacity rule and random
+    /// face samples have no kernel and are refused by name.
+    #[test]
+    fn authors_choices_are_flags_or_refused_by_name() {
+        let p = VirtualMeshParams { fallback: ShadingFallback::Unshaded, ..Default::default() };
+        assert_eq!(vmesh_words(p).unwrap(), [0, 16, 2, 0]);
+        let p = VirtualMeshParams { rule: DirectionalRule::Authors, ..Default::default() };
+        let e = vmesh_words(p).unwrap_err();
+        assert!(matches!(e, Error::Unsupported { what } if what.contains("rule")), "{e}");
+        let p = VirtualMeshParams { sampling: FaceSampling::authors(1), ..Default::default() };
+        let e = vmesh_words(p).unwrap_err();
+        assert!(matches!(e, Error::Unsupported { what } if what.contains("sampling")), "{e}");
     }
 }

@@ -187,6 +187,10 @@ fn shade_vmesh(
         }
         return unweighted / f32(faces);
     }
+    // ShadingFallback::Unshaded (flag 2): no radiance.
+    if (params.vmesh.z & 2u) != 0u {
+        return vec3<f32>(0.0);
+    }
     // Fallback: every stored normal, no visibility filter.
     var sum = vec3<f32>(0.0);
     var count = 0u;

@@ -46,7 +46,7 @@ fn opacity_of(tag: u32, dir: vec3<f32>) -> vec2<f32> {
     let i = index_of_tag(tag);
     if kind == KIND_VMESH {
         vm_load(i);
-        return vec2<f32>(vmesh_opacity(dir, params.vmesh.x, params.vmesh.z != 0u), 0.0);
+        return vec2<f32>(vmesh_opacity(dir, params.vmesh.x, (params.vmesh.z & 1u) != 0u), 0.0);
     }
     let r = records[i];
     if kind == KIND_SGGX {
@@ -133,7 +133,7 @@ fn view_pass(
             visibility = shadow_cached(c, lit);
         }
         radiance = shade_vmesh(to_eye, lit.light, visibility, ambient, params.vmesh.y);
-        p = vec2<f32>(vmesh_opacity(to_eye, params.vmesh.x, params.vmesh.z != 0u), 0.0);
+        p = vec2<f32>(vmesh_opacity(to_eye, params.vmesh.x, (params.vmesh.z & 1u) != 0u), 0.0);
     } else {
         let r = records[ri];
         var m: MaterialSample;
