@@ -1,14 +1,22 @@
 //! `voxlod export`: a scene (voxelized, then filtered with the Averages fit) or a `.vxl` file
 //! out to MagicaVoxel `.vox` or Mitsuba 3 `.vol`.
+//!
+//! Coordinates: a `.vol` bounding box is `f32`, which cannot place a grid of 10⁻³ voxels at
+//! 10⁷. It is written relative to the scene's origin (`world = box + scene_origin`, printed and
+//! in the JSON summary): for a scene that reaches near the world origin the origin is 0 and the
+//! box is the world box; a far one keeps its own precision, the same box at any offset. A `.vxl`
+//! input is re-centred by the same rule on its grid's box. `.vox` models carry no origin.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use glam::DVec3;
 use voxlod::cpu::appearance::averages;
 use voxlod::cpu::appearance::line_sampler::SamplingContext;
 use voxlod::cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod::cpu::voxelize;
+use voxlod::format::origin::recentring_origin;
 use voxlod::format::records::AverageRecord;
 use voxlod::format::{BrickMap, GridSpec, Occupancy, VxlRecord, vol, vox, vxl};
 
@@ -28,6 +36,7 @@ struct Summary {
     dims: [u32; 3],
     voxel_size: f64,
     origin: [f64; 3],
+    scene_origin: [f64; 3],
     voxels: usize,
     files: Vec<FileSummary>,
     models: Option<usize>,
@@ -64,7 +73,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
     let spinner = ui.spinner();
     let start = Instant::now();
     let is_vxl = Path::new(&args.input).extension().is_some_and(|e| e.eq_ignore_ascii_case("vxl"));
-    let (grid, voxels) = if is_vxl {
+    let (grid, scene_origin, voxels) = if is_vxl {
         spinner.set_message(format!("reading {}", args.input));
         read_vxl(Path::new(&args.input))?
     } else {
@@ -76,6 +85,8 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
     spinner.set_message(format!("writing {}", out.display()));
     let start = Instant::now();
     let (mut files, mut models, mut palette) = (Vec::new(), None, None);
+    // A .vol box is f32: written relative to the scene's origin (see the module docs).
+    let local = GridSpec { origin: grid.origin - scene_origin, ..grid };
     let write_err = || format!("exporting to {}", out.display());
     match args.output.format {
         ExportFormat::Vox => {
@@ -99,7 +110,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         ExportFormat::Vol => match &voxels {
             Voxels::Averages(map) => {
                 let (density, albedo) =
-                    vol::density_and_albedo(&grid, map).with_context(write_err)?;
+                    vol::density_and_albedo(&local, map).with_context(write_err)?;
                 let albedo_path = albedo_path(out);
                 vol::write(out, &density).with_context(write_err)?;
                 vol::write(&albedo_path, &albedo)
@@ -108,7 +119,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
                 files.push(file(&albedo_path, "albedo: linear RGB, 3 channels")?);
             }
             Voxels::Occupancy(map) => {
-                let density = vol::occupancy_density(&grid, map).with_context(write_err)?;
+                let density = vol::occupancy_density(&local, map).with_context(write_err)?;
                 vol::write(out, &density).with_context(write_err)?;
                 files.push(file(out, "density: extinction per world unit, 1 channel")?);
             }
@@ -131,6 +142,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         dims: grid.dims.to_array(),
         voxel_size: grid.voxel_size,
         origin: grid.origin.to_array(),
+        scene_origin: scene_origin.to_array(),
         voxels: count,
         files,
         models,
@@ -153,6 +165,12 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         summary.prepare_s,
         summary.write_s
     );
+    if scene_origin != DVec3::ZERO {
+        println!(
+            "  scene origin {scene_origin} (world = local + origin); .vol boxes are local, .vox \
+             models origin-free"
+        );
+    }
     for f in &summary.files {
         println!("  {} ({} bytes): {}", f.path, f.bytes, f.content);
     }
@@ -178,15 +196,17 @@ fn file(path: &Path, content: &'static str) -> Result<FileSummary> {
     Ok(FileSummary { path: path.display().to_string(), content, bytes })
 }
 
-/// A `.vxl` file of Averages or occupancy records.
-fn read_vxl(path: &Path) -> Result<(GridSpec, Voxels)> {
+/// A `.vxl` file of Averages or occupancy records: its (world) grid, the re-centring origin of
+/// the grid's box, and its records.
+fn read_vxl(path: &Path) -> Result<(GridSpec, DVec3, Voxels)> {
     let info = vxl::read_info(path)?;
+    let origin = |g: &GridSpec| recentring_origin(g.origin, g.max_corner()).unwrap_or(DVec3::ZERO);
     if info.record_tag == AverageRecord::TAG {
         let f = vxl::read::<AverageRecord>(path)?;
-        Ok((f.grid, Voxels::Averages(f.map)))
+        Ok((f.grid, origin(&f.grid), Voxels::Averages(f.map)))
     } else if info.record_tag == Occupancy::TAG {
         let f = vxl::read::<Occupancy>(path)?;
-        Ok((f.grid, Voxels::Occupancy(f.map)))
+        Ok((f.grid, origin(&f.grid), Voxels::Occupancy(f.map)))
     } else {
         bail!(
             "{} holds {} records; export reads Averages ({}) or occupancy ({}) records",
@@ -198,8 +218,9 @@ fn read_vxl(path: &Path) -> Result<(GridSpec, Voxels)> {
     }
 }
 
-/// Voxelizes a scene and fits an Averages record per voxel.
-fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, Voxels)> {
+/// Voxelizes a scene and fits an Averages record per voxel: the grid in world coordinates, the
+/// scene's origin, the records.
+fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, DVec3, Voxels)> {
     let scene = load_scene(&args.input)?;
     let geometry = scene.geometry();
     let (lo, hi) = scene.bounds()?;
@@ -216,5 +237,6 @@ fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, Vo
     let ctx = SamplingContext::new(&scene, &geometry, &vox).context("preparing the sampling")?;
     let opts = PrecomputeOptions { rays: args.rays, seed: 0 };
     let fitted = precompute(&ctx, &opts, averages::fit).context("fitting Averages records")?;
-    Ok((fitted.grid, Voxels::Averages(fitted.records)))
+    let world = GridSpec { origin: fitted.grid.origin + scene.origin, ..fitted.grid };
+    Ok((world, scene.origin, Voxels::Averages(fitted.records)))
 }

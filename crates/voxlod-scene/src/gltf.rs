@@ -4,8 +4,17 @@
 //!
 //! What is loaded:
 //! - the default scene's node hierarchy (else the first scene's; a file without scenes loads
-//!   every root node), flattened into world-space [`Mesh`]es, one per (node, primitive);
-//!   normals by the inverse transpose, winding flipped under mirroring transforms;
+//!   every root node), flattened into [`Mesh`]es, one per (node, primitive); node transforms
+//!   read in `f64` from the JSON's digits and composed in `f64`, positions transformed in `f64`
+//!   (accessors themselves are `f32`, as the format defines them); normals by the inverse
+//!   transpose, winding flipped under mirroring transforms;
+//! - re-centred: [`Scene::origin`] is the re-centring origin of the `f64` bounds of every
+//!   instanced vertex ([`voxlod_format::origin::recentring_origin`]; zero for a model that reaches
+//!   near the world origin), subtracted in `f64` from positions and the camera; node matrices
+//!   are moved into the same local frame (roots, and the translation keys that animate them), so
+//!   posed meshes stay consistent with the rest pose. A model placed at 10⁷ by a node
+//!   translation loads to the same `f32` positions as at the origin, to within one unit in the
+//!   last place;
 //! - every primitive of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (points and lines are
 //!   skipped and counted in [`LoadReport`]); morph targets at the default weights; skinned
 //!   meshes at the rest pose (joint world × inverse bind matrix), with their [`SkinBinding`]

@@ -3,6 +3,11 @@
 //! - Every line is checked first (module `scan`): unparsable numbers, NaN/∞ coordinates, face
 //!   indices that are zero or out of range, MTL statements with missing values are errors
 //!   naming the file and the line. tobj then parses the validated text.
+//! - Coordinates are read in `f64` (tobj's `use_f64`) and the scene is re-centred before they
+//!   are stored in `f32`: [`Scene::origin`] is the re-centring origin of the bounds of every
+//!   vertex the faces use ([`voxlod_format::origin::recentring_origin`]; zero for a model that
+//!   reaches near the world origin), subtracted in `f64`. A model exported at 10⁶–10⁷ loads to
+//!   the same `f32` positions as at the origin, to within the digits its file holds.
 //! - Faces are loaded untriangulated and triangulated here by ear clipping on the polygon's
 //!   dominant plane (module `triangulate`), which is correct for concave faces; faces of one or
 //!   two corners, `l` polylines and `p` points are skipped and counted in [`LoadReport`].
@@ -57,7 +62,7 @@ pub struct LoadReport {
     pub unknown_materials: Vec<String>,
 }
 
-/// Loads an OBJ file, its MTL libraries and their textures into a world-space scene.
+/// Loads an OBJ file, its MTL libraries and their textures into a scene, re-centred.
 pub fn load(path: &Path) -> Result<Scene> {
     load_with_report(path).map(|(scene, _)| scene)
 }
