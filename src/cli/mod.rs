@@ -188,13 +188,14 @@ pub enum ExportFormat {
 pub struct RenderArgs {
     /// A scene file (.obj, .gltf, .glb) or `builtin:NAME[?key=value&...]`.
     pub scene: String,
-    /// Camera `eye=X,Y,Z;target=X,Y,Z[;up=X,Y,Z][;fov=DEG]` (default: the scene's own or one
-    /// framing its bounds).
+    /// Camera `eye=X,Y,Z;target=X,Y,Z[;up=X,Y,Z][;fov=DEG]` in world coordinates (default: the
+    /// scene's own or one framing its bounds).
     #[arg(long)]
     pub camera: Option<String>,
-    /// Light `dir=X,Y,Z[;irradiance=E]` (toward the light) or `point=X,Y,Z[;intensity=I]`.
+    /// Light `dir=X,Y,Z[;irradiance=E]` (toward the light) or `point=X,Y,Z[;intensity=I]`
+    /// (world coordinates, like the camera's).
     #[arg(long, value_parser = parse::light_arg)]
-    pub light: Option<voxlod::scene::Light>,
+    pub light: Option<parse::LightSpec>,
     /// Rays per pixel.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,

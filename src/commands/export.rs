@@ -1,17 +1,26 @@
 //! `voxlod export`: a scene (voxelized, then filtered with the Averages fit), a `.vxl` file or
 //! a procedural volume's density out to MagicaVoxel `.vox`, Mitsuba 3 `.vol` or NanoVDB
 //! `.nvdb`.
+//!
+//! Coordinates: a `.vol` bounding box is `f32`, which cannot place a grid of 10⁻³ voxels at
+//! 10⁷. It is written relative to the scene's origin (`world = box + scene_origin`, printed and
+//! in the JSON summary): for a scene that reaches near the world origin the origin is 0 and the
+//! box is the world box; a far one keeps its own precision, the same box at any offset. A `.vxl`
+//! input is re-centred by the same rule on its grid's box. `.nvdb` keeps the world grid (its map
+//! is `f64`); `.vox` models carry no origin.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use glam::DVec3;
 use voxlod::cpu::appearance::averages;
 use voxlod::cpu::appearance::line_sampler::SamplingContext;
 use voxlod::cpu::appearance::precompute::{PrecomputeOptions, precompute};
 use voxlod::cpu::volume::{self, BuildSettings, VolumeSpec};
 use voxlod::cpu::voxelize;
 use voxlod::format::nvdb::{self, GridClass, NvdbGrid};
+use voxlod::format::origin::recentring_origin;
 use voxlod::format::records::AverageRecord;
 use voxlod::format::{BrickMap, GridSpec, Occupancy, VxlRecord, vol, vox, vxl};
 
@@ -36,6 +45,7 @@ struct Summary {
     dims: [u32; 3],
     voxel_size: f64,
     origin: [f64; 3],
+    scene_origin: [f64; 3],
     voxels: usize,
     files: Vec<FileSummary>,
     models: Option<usize>,
@@ -89,7 +99,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
     let start = Instant::now();
     let is_vxl = Path::new(&args.input).extension().is_some_and(|e| e.eq_ignore_ascii_case("vxl"));
     let volume_preset = args.input.strip_prefix(VOLUME_PREFIX);
-    let (grid, voxels) = if is_vxl {
+    let (grid, scene_origin, voxels) = if is_vxl {
         spinner.set_message(format!("reading {}", args.input));
         read_vxl(Path::new(&args.input))?
     } else if let Some(preset) = volume_preset {
@@ -100,7 +110,8 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
             );
         }
         spinner.set_message(format!("building the {preset} volume"));
-        volume_density(preset, args.res)?
+        let (grid, voxels) = volume_density(preset, args.res)?;
+        (grid, DVec3::ZERO, voxels)
     } else {
         spinner.set_message(format!("loading {}", args.input));
         filter_scene(&args, |m| spinner.set_message(m))?
@@ -110,6 +121,8 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
     spinner.set_message(format!("writing {}", out.display()));
     let start = Instant::now();
     let (mut files, mut models, mut palette, mut grids) = (Vec::new(), None, None, None);
+    // A .vol box is f32: written relative to the scene's origin (see the module docs).
+    let local = GridSpec { origin: grid.origin - scene_origin, ..grid };
     let write_err = || format!("exporting to {}", out.display());
     match args.output.format {
         ExportFormat::Vox => {
@@ -134,7 +147,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         ExportFormat::Vol => match &voxels {
             Voxels::Averages(map) => {
                 let (density, albedo) =
-                    vol::density_and_albedo(&grid, map).with_context(write_err)?;
+                    vol::density_and_albedo(&local, map).with_context(write_err)?;
                 let albedo_path = albedo_path(out);
                 vol::write(out, &density).with_context(write_err)?;
                 vol::write(&albedo_path, &albedo)
@@ -143,12 +156,12 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
                 files.push(file(&albedo_path, "albedo: linear RGB, 3 channels")?);
             }
             Voxels::Occupancy(map) => {
-                let density = vol::occupancy_density(&grid, map).with_context(write_err)?;
+                let density = vol::occupancy_density(&local, map).with_context(write_err)?;
                 vol::write(out, &density).with_context(write_err)?;
                 files.push(file(out, "density: extinction per world unit, 1 channel")?);
             }
             Voxels::Density(map) => {
-                let density = vol::VolGrid::from_brick_map(&grid, map, [0.0], |&d| [d])
+                let density = vol::VolGrid::from_brick_map(&local, map, [0.0], |&d| [d])
                     .with_context(write_err)?;
                 vol::write(out, &density).with_context(write_err)?;
                 files.push(file(out, "density: extinction per world unit, 1 channel")?);
@@ -211,6 +224,7 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         dims: grid.dims.to_array(),
         voxel_size: grid.voxel_size,
         origin: grid.origin.to_array(),
+        scene_origin: scene_origin.to_array(),
         voxels: count,
         files,
         models,
@@ -234,6 +248,12 @@ pub fn export(ui: &Ui, args: ExportArgs) -> Result<()> {
         summary.prepare_s,
         summary.write_s
     );
+    if scene_origin != DVec3::ZERO {
+        println!(
+            "  scene origin {scene_origin} (world = local + origin); .vol boxes are local, .vox \
+             models origin-free"
+        );
+    }
     for f in &summary.files {
         println!("  {} ({} bytes): {}", f.path, f.bytes, f.content);
     }
@@ -323,13 +343,13 @@ fn volume_density(preset: &str, res: u32) -> Result<(GridSpec, Voxels)> {
     // World-aligned grid: the frame's cube, its minimum corner as origin.
     let size = f.voxel_size as f64;
     let n = res as f64;
-    let world = |q: glam::DVec3| {
+    let world = |q: DVec3| {
         f.origin.as_dvec3()
             + (f.u.as_dvec3() * q.x + f.v.as_dvec3() * q.y + f.w.as_dvec3() * q.z) * size
     };
     let origin = (0..8)
-        .map(|c| world(glam::DVec3::new((c & 1) as f64, (c >> 1 & 1) as f64, (c >> 2) as f64) * n))
-        .fold(glam::DVec3::INFINITY, glam::DVec3::min);
+        .map(|c| world(DVec3::new((c & 1) as f64, (c >> 1 & 1) as f64, (c >> 2) as f64) * n))
+        .fold(DVec3::INFINITY, DVec3::min);
     let grid = GridSpec::new(origin, size, glam::UVec3::splat(res))?;
     let edge = spec.metavoxel_edge;
     let mut voxels = Vec::new();
@@ -368,14 +388,15 @@ fn file(path: &Path, content: &'static str) -> Result<FileSummary> {
 }
 
 /// A `.vxl` file of Averages or occupancy records.
-fn read_vxl(path: &Path) -> Result<(GridSpec, Voxels)> {
+fn read_vxl(path: &Path) -> Result<(GridSpec, DVec3, Voxels)> {
+    let origin = |g: &GridSpec| recentring_origin(g.origin, g.max_corner()).unwrap_or(DVec3::ZERO);
     let info = vxl::read_info(path)?;
     if info.record_tag == AverageRecord::TAG {
         let f = vxl::read::<AverageRecord>(path)?;
-        Ok((f.grid, Voxels::Averages(f.map)))
+        Ok((f.grid, origin(&f.grid), Voxels::Averages(f.map)))
     } else if info.record_tag == Occupancy::TAG {
         let f = vxl::read::<Occupancy>(path)?;
-        Ok((f.grid, Voxels::Occupancy(f.map)))
+        Ok((f.grid, origin(&f.grid), Voxels::Occupancy(f.map)))
     } else {
         bail!(
             "{} holds {} records; export reads Averages ({}) or occupancy ({}) records",
@@ -388,7 +409,7 @@ fn read_vxl(path: &Path) -> Result<(GridSpec, Voxels)> {
 }
 
 /// Voxelizes a scene and fits an Averages record per voxel.
-fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, Voxels)> {
+fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, DVec3, Voxels)> {
     let scene = load_scene(&args.input)?;
     let geometry = scene.geometry();
     let (lo, hi) = scene.bounds()?;
@@ -405,5 +426,6 @@ fn filter_scene(args: &ExportArgs, say: impl Fn(String)) -> Result<(GridSpec, Vo
     let ctx = SamplingContext::new(&scene, &geometry, &vox).context("preparing the sampling")?;
     let opts = PrecomputeOptions { rays: args.rays, seed: 0 };
     let fitted = precompute(&ctx, &opts, averages::fit).context("fitting Averages records")?;
-    Ok((fitted.grid, Voxels::Averages(fitted.records)))
+    let world = GridSpec { origin: fitted.grid.origin + scene.origin, ..fitted.grid };
+    Ok((world, scene.origin, Voxels::Averages(fitted.records)))
 }

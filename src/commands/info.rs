@@ -45,7 +45,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
         }
         Some("obj" | "gltf" | "glb") => {
             let s = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
-            let (lo, hi) = s.bounds()?;
+            let (lo, hi) = s.world_bounds()?;
             json!({
                 "kind": "scene",
                 "meshes": s.meshes.len(),
@@ -55,6 +55,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
                 "textures": s.textures.len(),
                 "bounds_min": lo.to_array(),
                 "bounds_max": hi.to_array(),
+                "origin": s.origin.to_array(),
                 "camera": s.camera.is_some(),
                 "lights": s.lights.len(),
                 "nodes": s.nodes.len(),

@@ -25,6 +25,7 @@ struct Summary {
     rays_per_second: f64,
     backend: String,
     output: String,
+    scene_origin: [f64; 3],
 }
 
 /// Renders the ground truth of a scene.
@@ -36,11 +37,11 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
     spinner.set_message(format!("loading {}", args.scene));
     let mut scene = load_scene(&args.scene)?;
     let camera = match &args.camera {
-        Some(s) => parse::camera(s, scene.default_camera()?)?,
+        Some(s) => parse::camera(s, scene.default_camera()?, scene.origin)?,
         None => scene.default_camera()?,
     };
     if let Some(light) = args.light {
-        scene.lights = vec![light];
+        scene.lights = vec![light.in_scene(scene.origin)];
     }
     let geometry = scene.geometry();
     spinner.set_message(format!("building the BVH over {} triangles", geometry.triangle_count()));
@@ -93,11 +94,18 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         rays_per_second: rays / render_seconds,
         backend: backend_name,
         output: args.output.display().to_string(),
+        scene_origin: scene.origin.to_array(),
     };
     if args.json {
         return print_json("render", &summary);
     }
     println!("backend: {}", summary.backend);
+    if scene.origin != glam::DVec3::ZERO {
+        println!(
+            "scene origin {} (re-centred; --camera and --light are world coordinates)",
+            scene.origin
+        );
+    }
     println!(
         "{} ({} triangles), {}×{} at {} rays/pixel: BVH {:.3} s, render {:.3} s \
          ({:.2} M camera rays/s, shadow rays extra) → {}",

@@ -17,6 +17,7 @@ struct Summary {
     dims: [u32; 3],
     voxel_size: f64,
     origin: [f64; 3],
+    scene_origin: [f64; 3],
     voxels: usize,
     bricks: usize,
     seconds: f64,
@@ -65,6 +66,8 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         }
     };
     let seconds = start.elapsed().as_secs_f64();
+    // The scene voxelizes in its local coordinates; files keep the grid's world origin in f64.
+    let grid = GridSpec { origin: grid.origin + scene.origin, ..grid };
     spinner.set_message(format!("writing {}", args.output.display()));
     let written = if ext.as_deref() == Some("vxl") {
         let meta = [
@@ -86,6 +89,7 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         dims: grid.dims.to_array(),
         voxel_size: grid.voxel_size,
         origin: grid.origin.to_array(),
+        scene_origin: scene.origin.to_array(),
         voxels: occupancy.len(),
         bricks: occupancy.bricks().len(),
         seconds,
@@ -109,5 +113,11 @@ pub fn voxelize(ui: &Ui, args: VoxelizeArgs) -> Result<()> {
         summary.seconds,
         summary.output
     );
+    if scene.origin != glam::DVec3::ZERO {
+        println!(
+            "  re-centred: scene origin {}, grid origin {} (world coordinates, f64)",
+            scene.origin, grid.origin
+        );
+    }
     Ok(())
 }

@@ -6,6 +6,7 @@ mod cli;
 mod cone;
 mod dynamic;
 mod export;
+mod far_from_origin;
 mod heitz_neyret;
 mod scene_files;
 mod slicemap;

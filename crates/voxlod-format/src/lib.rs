@@ -56,6 +56,7 @@
 //! | [`vol`] | Mitsuba 3 `.vol` grid volumes (dense `float32`, 1/3/6 channels): density (extinction) and albedo of an Averages grid; read and write |
 //! | [`nvdb`] | NanoVDB `.nvdb` (NanoVDB 32.4's flat layout): sparse `float` and `Vec3f` grids with node statistics, index-to-world map (index = voxel centre) and full checksum; density (extinction) and colour of an Averages grid; read and write |
 //! | [`records`] | the Averages, SGGX, virtual-mesh and specular records and the adaptive grid's reference, with their quantizers ([`records::quant`]) |
+//! | [`origin`] | [`origin::recentring_origin`]: the `f64` offset that brings a box far from the world origin next to it (0 for a box that reaches near the origin), so its coordinates fit `f32` |
 //! | [`io`] | [`io::write_atomic`]: a temporary file renamed over the target, so a failure never leaves half a file |
 //!
 //! Memory follows occupied content: a [`BrickMap`] holds 80 bytes per occupied brick, one value
@@ -114,6 +115,7 @@ pub mod grid;
 pub mod io;
 pub mod morton;
 pub mod nvdb;
+pub mod origin;
 pub mod records;
 pub mod vol;
 pub mod vox;

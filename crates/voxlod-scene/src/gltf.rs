@@ -4,8 +4,17 @@
 //!
 //! What is loaded:
 //! - the default scene's node hierarchy (else the first scene's; a file without scenes loads
-//!   every root node), flattened into world-space [`Mesh`]es, one per (node, primitive);
-//!   normals by the inverse transpose, winding flipped under mirroring transforms;
+//!   every root node), flattened into [`Mesh`]es, one per (node, primitive); node transforms
+//!   read in `f64` from the JSON's digits and composed in `f64`, positions transformed in `f64`
+//!   (accessors themselves are `f32`, as the format defines them); normals by the inverse
+//!   transpose, winding flipped under mirroring transforms;
+//! - re-centred: [`Scene::origin`] is the re-centring origin of the `f64` bounds of every
+//!   instanced vertex ([`voxlod_format::origin::recentring_origin`]; zero for a model that reaches
+//!   near the world origin), subtracted in `f64` from positions and the camera; node matrices
+//!   are moved into the same local frame (roots, and the translation keys that animate them), so
+//!   posed meshes stay consistent with the rest pose. A model placed at 10⁷ by a node
+//!   translation loads to the same `f32` positions as at the origin, to within one unit in the
+//!   last place;
 //! - every primitive of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN (points and lines are
 //!   skipped and counted in [`LoadReport`]); morph targets at the default weights; skinned
 //!   meshes at the rest pose (joint world × inverse bind matrix), with their [`SkinBinding`]
@@ -37,7 +46,7 @@ mod primitive;
 use std::io;
 use std::path::Path;
 
-use glam::Mat4;
+use glam::{DMat4, DVec3};
 
 use crate::{Mesh, Result, Scene};
 
@@ -98,39 +107,37 @@ pub fn load_from_bytes(
     mut resolve: impl FnMut(&Path) -> io::Result<Vec<u8>>,
 ) -> Result<(Scene, LoadReport)> {
     let (json_bytes, bin) = parse::split_glb(path, bytes)?;
-    let root = parse::deserialize(path, json_bytes)?;
+    let (root, raw) = parse::deserialize(path, json_bytes)?;
     parse::validate(path, &root)?;
     let parents = parse::node_parents(path, &root)?;
     let buffers = buffers::load_buffers(path, &root, bin, &mut resolve)?;
     let data = accessor::Data { path, root: &root, buffers: &buffers };
 
-    let nodes = nodes::nodes(path, &root, &parents)?;
+    let (mut nodes, world) = nodes::nodes(path, &root, &raw, &parents)?;
     let order = nodes::scene_nodes(&root, &parents);
     let mut mats = material::materials(&data, &mut resolve)?;
     let skins = nodes::skins(&data)?;
-    let joint_mats: Vec<Vec<Mat4>> = skins
+    let joint_mats: Vec<Vec<DMat4>> = skins
         .iter()
         .map(|s| {
             s.joints
                 .iter()
                 .zip(&s.inverse_bind_matrices)
-                .map(|(&j, ibm)| nodes[j].world * *ibm)
+                .map(|(&j, ibm)| world[j] * ibm.as_dmat4())
                 .collect()
         })
         .collect();
-    let animations = nodes::animations(&data)?;
-    let (camera, orthographic) = nodes::camera(path, &root, &order, &nodes)?;
-    let mut report =
-        LoadReport { orthographic_cameras_skipped: orthographic, ..Default::default() };
+    let mut animations = nodes::animations(&data)?;
+    let mut report = LoadReport::default();
 
-    let mut meshes: Vec<Mesh> = Vec::new();
+    let mut built: Vec<primitive::Built> = Vec::new();
     let mut default_material = None;
     for &n in &order {
         let Some(m) = root.nodes[n].mesh.map(|m| m.value()) else { continue };
         let skin = root.nodes[n].skin.map(|s| s.value());
         let inst = primitive::Instance {
             node: n,
-            world: nodes[n].world,
+            world: world[n],
             skin: skin.map(|s| (s, &joint_mats[s][..])),
         };
         for (p, prim) in root.meshes[m].primitives.iter().enumerate() {
@@ -143,12 +150,12 @@ pub fn load_from_bytes(
                 }),
             };
             let uv = mats.uv[material];
-            if let Some(mesh) = primitive::mesh(&data, (m, p), &inst, material, &uv, &mut report)? {
-                meshes.push(mesh);
+            if let Some(b) = primitive::mesh(&data, (m, p), &inst, material, &uv, &mut report)? {
+                built.push(b);
             }
         }
     }
-    if meshes.is_empty() {
+    if built.is_empty() {
         let element = match root.scene.map(|s| s.value()).or((!root.scenes.is_empty()).then_some(0))
         {
             Some(s) => format!("scenes[{s}]"),
@@ -160,9 +167,28 @@ pub fn load_from_bytes(
         );
         return Err(parse::err(path, element, reason));
     }
+    // Re-centre: the scene's origin from the f64 bounds of every instanced vertex, subtracted
+    // in f64 from positions, the camera and the node hierarchy.
+    let (lo, hi) = built
+        .iter()
+        .flat_map(|b| &b.world)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let origin = voxlod_format::origin::recentring_origin(lo, hi).unwrap_or(DVec3::ZERO);
+    let meshes: Vec<Mesh> = built
+        .into_iter()
+        .map(|b| {
+            let mut mesh = b.mesh;
+            mesh.positions = b.world.iter().map(|&w| (w - origin).as_vec3()).collect();
+            mesh
+        })
+        .collect();
+    let (camera, orthographic) = nodes::camera(path, &root, &order, &world, origin)?;
+    report.orthographic_cameras_skipped = orthographic;
+    nodes::recentre(&mut nodes, &world, &mut animations, origin);
     let name = path.file_stem().map_or_else(|| "gltf".into(), |s| s.to_string_lossy().into_owned());
     let scene = Scene {
         name,
+        origin,
         meshes,
         materials: mats.materials,
         textures: mats.textures,

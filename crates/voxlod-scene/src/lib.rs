@@ -1,4 +1,5 @@
-//! The scene inputs of voxlod: triangle [`Mesh`]es in world space, [`Material`]s with
+//! The scene inputs of voxlod: triangle [`Mesh`]es in `f32` coordinates local to an `f64`
+//! [`Scene::origin`] (far-from-origin models are re-centred on load), [`Material`]s with
 //! [`Texture`]s, a pinhole [`Camera`], [`Light`]s and the background colour; loaders for OBJ + MTL
 //! ([`obj`]) and glTF 2.0 ([`gltf`]) that turn every malformed file into an [`Error`] naming the
 //! file and the element; deterministic procedural scenes that need no download ([`procedural`]);
@@ -45,6 +46,12 @@
 //! ```
 //!
 //! # Conventions
+//! Coordinates: the loaders read in `f64` and re-centre each file on an origin chosen from its
+//! bounds (zero unless the model sits far from the world origin relative to its size; see
+//! [`voxlod_format::origin`]); a scene's meshes, camera and lights are local to it, world
+//! positions given by a user go through [`Scene::to_local`], results leaving the library through
+//! [`Scene::to_world`].
+//!
 //! The CPU↔GPU contract: right-handed, y up; colours are linear RGB unless a name says sRGB; a
 //! white Lambertian surface facing a directional light of irradiance `E` has radiance `E/π`;
 //! texture coordinates have their origin at the image's top-left corner, v pointing down
@@ -54,8 +61,8 @@
 //! # Main types
 //! | item | what it is |
 //! |---|---|
-//! | [`Scene`] | meshes, materials, textures, camera, lights, background; [`Scene::load`], [`Scene::geometry`], [`Scene::default_camera`] |
-//! | [`Mesh`], [`Geometry`] | one indexed triangle mesh in world space; all of a scene's triangles in flat arrays with a material per triangle |
+//! | [`Scene`] | meshes, materials, textures, camera, lights, background, all local to [`Scene::origin`] (`world = local + origin`, `f64`); [`Scene::load`], [`Scene::geometry`], [`Scene::default_camera`], [`Scene::to_local`] / [`Scene::to_world`] |
+//! | [`Mesh`], [`Geometry`] | one indexed triangle mesh in the scene's (local) coordinates; all of a scene's triangles in flat arrays with a material per triangle |
 //! | [`Material`], [`Texture`], [`Sampler`] | base colour (factor × sRGB texture, bilinear in linear space), Blinn-Phong specular, [`AlphaMode`], sidedness |
 //! | [`Camera`], [`camera::CameraFrame`] | a look-at pinhole camera and the one primary-ray convention |
 //! | [`Light`] | one directional or point light, [`Light::sample`]d at a point |

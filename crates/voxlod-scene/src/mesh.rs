@@ -1,4 +1,5 @@
-//! [`Mesh`]: an indexed triangle mesh in world space with per-vertex normals and optional UVs.
+//! [`Mesh`]: an indexed triangle mesh in its scene's coordinates with per-vertex normals and
+//! optional UVs.
 
 use glam::{Vec2, Vec3};
 
@@ -21,7 +22,8 @@ pub struct SkinBinding {
     pub bind_normals: Vec<Vec3>,
 }
 
-/// An indexed triangle mesh, already transformed to world space.
+/// An indexed triangle mesh, already transformed to its scene's coordinates (world space less
+/// [`crate::Scene::origin`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     /// Name, used in error messages.

@@ -3,6 +3,11 @@
 //! - Every line is checked first (module `scan`): unparsable numbers, NaN/∞ coordinates, face
 //!   indices that are zero or out of range, MTL statements with missing values are errors
 //!   naming the file and the line. tobj then parses the validated text.
+//! - Coordinates are read in `f64` (tobj's `use_f64`) and the scene is re-centred before they
+//!   are stored in `f32`: [`Scene::origin`] is the re-centring origin of the bounds of every
+//!   vertex the faces use ([`voxlod_format::origin::recentring_origin`]; zero for a model that
+//!   reaches near the world origin), subtracted in `f64`. A model exported at 10⁶–10⁷ loads to
+//!   the same `f32` positions as at the origin, to within the digits its file holds.
 //! - Faces are loaded untriangulated and triangulated here by ear clipping on the polygon's
 //!   dominant plane (module `triangulate`), which is correct for concave faces; faces of one or
 //!   two corners, `l` polylines and `p` points are skipped and counted in [`LoadReport`].
@@ -32,7 +37,7 @@ use std::collections::{BTreeSet, HashMap};
 use std::io;
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::{Error, Material, Mesh, Result, Scene};
 
@@ -57,7 +62,7 @@ pub struct LoadReport {
     pub unknown_materials: Vec<String>,
 }
 
-/// Loads an OBJ file, its MTL libraries and their textures into a world-space scene.
+/// Loads an OBJ file, its MTL libraries and their textures into a scene, re-centred.
 pub fn load(path: &Path) -> Result<Scene> {
     load_with_report(path).map(|(scene, _)| scene)
 }
@@ -157,6 +162,7 @@ pub fn load_from_bytes(
     report.unknown_materials = unknown.into_iter().cloned().collect();
 
     let stem = path.file_stem().map_or_else(|| "obj".into(), |s| s.to_string_lossy().into_owned());
+    let origin = recentring_origin(&models);
     let mut default_material = None;
     let mut meshes = Vec::new();
     for model in &models {
@@ -170,7 +176,8 @@ pub fn load_from_bytes(
         };
         let name = format!("{stem}/{}", model.name);
         if let Some(mesh) =
-            convert_mesh(&model.mesh, name, material, &converted, &mut report).map_err(obj_err)?
+            convert_mesh(&model.mesh, name, material, origin, &converted, &mut report)
+                .map_err(obj_err)?
         {
             meshes.push(mesh);
         }
@@ -189,22 +196,36 @@ pub fn load_from_bytes(
         meshes,
         materials: converted.materials,
         textures: converted.textures,
+        origin,
         ..Default::default()
     };
     scene.validate()?;
     Ok((scene, report))
 }
 
-/// Converts one tobj mesh: triangulates its faces, fixes up normals, maps texture coordinates.
-/// `None` when it has no triangles.
+/// The scene's origin: [`voxlod_format::origin::recentring_origin`] of the `f64` bounds of every
+/// vertex tobj kept (those the faces use), or zero without vertices.
+fn recentring_origin(models: &[tobj::Model]) -> DVec3 {
+    let mut points = models.iter().flat_map(|m| m.mesh.positions.chunks_exact(3));
+    let Some(first) = points.next().map(DVec3::from_slice) else { return DVec3::ZERO };
+    let (lo, hi) =
+        points.map(DVec3::from_slice).fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    voxlod_format::origin::recentring_origin(lo, hi).unwrap_or(DVec3::ZERO)
+}
+
+/// Converts one tobj mesh: positions to `f32` relative to `origin` (subtracted in `f64`),
+/// triangulates its faces, fixes up normals, maps texture coordinates. `None` when it has no
+/// triangles.
 fn convert_mesh(
     m: &tobj::Mesh,
     name: String,
     material: usize,
+    origin: DVec3,
     converted: &mtl::Converted,
     report: &mut LoadReport,
 ) -> std::result::Result<Option<Mesh>, String> {
-    let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(Vec3::from_slice).collect();
+    let positions: Vec<Vec3> =
+        m.positions.chunks_exact(3).map(|p| (DVec3::from_slice(p) - origin).as_vec3()).collect();
     let n = positions.len();
     let arities: Vec<usize> = if m.face_arities.is_empty() {
         vec![3; m.indices.len() / 3]
@@ -238,7 +259,7 @@ fn convert_mesh(
     }
     let map = converted.maps.get(material).and_then(Option::as_ref);
     let uvs = if m.texcoords.len() == 2 * n {
-        let uv = m.texcoords.chunks_exact(2).map(Vec2::from_slice);
+        let uv = m.texcoords.chunks_exact(2).map(|t| DVec2::from_slice(t).as_vec2());
         match map {
             Some(map) => uv.map(|t| map.apply(t)).collect(),
             None => uv.map(|t| Vec2::new(t.x, 1.0 - t.y)).collect(),
@@ -259,7 +280,7 @@ fn convert_mesh(
     mesh.compute_normals();
     if m.normals.len() == 3 * n {
         for (computed, file) in mesh.normals.iter_mut().zip(m.normals.chunks_exact(3)) {
-            match Vec3::from_slice(file).try_normalize() {
+            match DVec3::from_slice(file).as_vec3().try_normalize() {
                 Some(unit) => *computed = unit,
                 None => report.normals_computed += 1,
             }

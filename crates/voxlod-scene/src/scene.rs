@@ -3,18 +3,31 @@
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use crate::{
     Animation, Camera, Error, Light, Material, MaterialSample, Mesh, Node, Result, Skin, Texture,
 };
 
-/// A scene in world space.
+/// A scene: meshes, materials, camera and lights in `f32` coordinates local to an `f64`
+/// [`origin`](Scene::origin) (`world = local + origin`).
+///
+/// The loaders read coordinates in `f64` and re-centre every file they load
+/// ([`voxlod_format::origin::recentring_origin`]): a model that reaches near the world origin
+/// keeps origin 0 and its world coordinates; a model far from it (geo-referenced CAD and GIS
+/// exports at 10⁶–10⁷) is stored around zero, so that it keeps the `f32` precision of its own
+/// scale and voxelizes and renders as it would at the world origin. Everything in a scene —
+/// positions, normals, camera, lights, node transforms — is local; world coordinates meet it only
+/// at its edges: convert them with [`Scene::to_local`] and [`Scene::to_world`] (camera and light
+/// specifications given by a user, exported grid origins, reports).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// Name, for messages and reports.
     pub name: String,
-    /// Meshes in world space.
+    /// World position of the local origin, in `f64`: `world = local + origin`. Zero for
+    /// procedural scenes and for files that reach near the world origin.
+    pub origin: DVec3,
+    /// Meshes, in local coordinates.
     pub meshes: Vec<Mesh>,
     /// Materials; every mesh refers to one.
     pub materials: Vec<Material>,
@@ -38,6 +51,7 @@ impl Default for Scene {
     fn default() -> Self {
         Self {
             name: "scene".into(),
+            origin: DVec3::ZERO,
             meshes: Vec::new(),
             materials: Vec::new(),
             textures: Vec::new(),
@@ -116,6 +130,32 @@ impl Scene {
         };
         scene.validate()?;
         Ok(scene)
+    }
+
+    /// A world position in this scene's local coordinates: `world − origin`, subtracted in `f64`
+    /// and rounded to `f32` once.
+    ///
+    /// ```
+    /// use glam::{DVec3, Vec3};
+    /// let scene = voxlod_scene::Scene { origin: DVec3::splat(1e7), ..Default::default() };
+    /// let world = DVec3::new(1e7 + 0.25, 1e7 - 2.0, 1e7);
+    /// assert_eq!(scene.to_local(world), Vec3::new(0.25, -2.0, 0.0));
+    /// assert_eq!(scene.to_world(Vec3::new(0.25, -2.0, 0.0)), world);
+    /// ```
+    pub fn to_local(&self, world: DVec3) -> Vec3 {
+        (world - self.origin).as_vec3()
+    }
+
+    /// A local position in world coordinates: `local + origin`, in `f64`.
+    pub fn to_world(&self, local: Vec3) -> DVec3 {
+        local.as_dvec3() + self.origin
+    }
+
+    /// Bounds of all triangles in world coordinates ([`Scene::bounds`] + [`Scene::origin`], in
+    /// `f64`), or an [`Error::EmptyScene`].
+    pub fn world_bounds(&self) -> Result<(DVec3, DVec3)> {
+        let (lo, hi) = self.bounds()?;
+        Ok((self.to_world(lo), self.to_world(hi)))
     }
 
     /// Total triangle count.
@@ -199,7 +239,8 @@ impl Scene {
         g
     }
 
-    /// Bounds of all triangles, or an [`Error::EmptyScene`] if there are none.
+    /// Bounds of all triangles in local coordinates, or an [`Error::EmptyScene`] if there are
+    /// none.
     pub fn bounds(&self) -> Result<(Vec3, Vec3)> {
         let mut b: Option<(Vec3, Vec3)> = None;
         for m in &self.meshes {

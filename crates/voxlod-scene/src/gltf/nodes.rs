@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use ::gltf::json;
-use glam::{Mat4, Quat, Vec3};
+use glam::{DMat4, DQuat, DVec3, Mat4, Quat, Vec3};
 use json::accessor::Type;
 use json::validation::Checked;
 
@@ -13,16 +13,45 @@ use super::parse::err;
 use crate::animation::{AnimatedProperty, Channel, Interpolation, Transform};
 use crate::{Animation, Camera, Node, Result, Skin};
 
-/// A node's local transform, checked finite, and its TRS form unless given by a matrix.
-fn local(path: &Path, i: usize, node: &json::Node) -> Result<(Mat4, Option<Transform>)> {
+/// `n` numbers of `nodes[i].<key>` read in `f64` from the JSON value, or `None` when absent or
+/// not `n` numbers (gltf-json's validation has then refused the file already).
+fn raw_numbers<const N: usize>(raw: &json::Value, i: usize, key: &str) -> Option<[f64; N]> {
+    let items = raw.pointer(&format!("/nodes/{i}/{key}"))?.as_array()?;
+    let mut out = [0.0; N];
+    if items.len() != N {
+        return None;
+    }
+    for (o, v) in out.iter_mut().zip(items) {
+        *o = v.as_f64()?;
+    }
+    Some(out)
+}
+
+/// A node's local transform in `f64` (the JSON's own digits: gltf-json keeps only `f32`),
+/// checked finite, and its TRS form unless given by a matrix.
+fn local(
+    path: &Path,
+    i: usize,
+    node: &json::Node,
+    raw: &json::Value,
+) -> Result<(DMat4, Option<Transform>)> {
     let bad = |what: &str| err(path, format!("nodes[{i}]"), format!("{what} is not finite"));
     if let Some(m) = node.matrix {
-        let m = Mat4::from_cols_array(&m);
+        let m = raw_numbers::<16>(raw, i, "matrix")
+            .map_or_else(|| Mat4::from_cols_array(&m).as_dmat4(), |m| DMat4::from_cols_array(&m));
         return if m.is_finite() { Ok((m, None)) } else { Err(bad("matrix")) };
     }
-    let t = Vec3::from_array(node.translation.unwrap_or([0.0; 3]));
-    let s = Vec3::from_array(node.scale.unwrap_or([1.0; 3]));
-    let r = Quat::from_array(node.rotation.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |r| r.0));
+    let vec3 = |key: &str, given: Option<[f32; 3]>, default: f64| {
+        raw_numbers::<3>(raw, i, key)
+            .map(DVec3::from_array)
+            .or(given.map(|g| Vec3::from_array(g).as_dvec3()))
+            .unwrap_or(DVec3::splat(default))
+    };
+    let t = vec3("translation", node.translation, 0.0);
+    let s = vec3("scale", node.scale, 1.0);
+    let r = raw_numbers::<4>(raw, i, "rotation").map(DQuat::from_array).unwrap_or_else(|| {
+        Quat::from_array(node.rotation.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |r| r.0)).as_dquat()
+    });
     if !t.is_finite() {
         return Err(bad("translation"));
     }
@@ -32,28 +61,34 @@ fn local(path: &Path, i: usize, node: &json::Node) -> Result<(Mat4, Option<Trans
     if !r.is_finite() || r.length_squared() == 0.0 {
         return Err(err(path, format!("nodes[{i}]"), format!("rotation {r} is not a rotation")));
     }
-    let trs = Transform { translation: t, rotation: r.normalize(), scale: s };
-    Ok((trs.matrix(), Some(trs)))
+    let r = r.normalize();
+    let trs = Transform { translation: t.as_vec3(), rotation: r.as_quat(), scale: s.as_vec3() };
+    Ok((DMat4::from_scale_rotation_translation(s, r, t), Some(trs)))
 }
 
-/// Every node with its local and world (rest pose) transforms. `parents` comes from
-/// [`super::parse::node_parents`], so the graph is a forest.
+/// Every node with its local and world (rest pose) transforms, and the world transforms in
+/// `f64`. `parents` comes from [`super::parse::node_parents`], so the graph is a forest. The
+/// `f32` matrices of the nodes are still in world coordinates: [`recentre`] moves them.
 pub(super) fn nodes(
     path: &Path,
     root: &json::Root,
+    raw: &json::Value,
     parents: &[Option<usize>],
-) -> Result<Vec<Node>> {
+) -> Result<(Vec<Node>, Vec<DMat4>)> {
     let mut out: Vec<Node> = Vec::with_capacity(root.nodes.len());
+    let mut locals = Vec::with_capacity(root.nodes.len());
     for (i, node) in root.nodes.iter().enumerate() {
-        let (local, trs) = local(path, i, node)?;
+        let (local, trs) = local(path, i, node, raw)?;
+        locals.push(local);
         out.push(Node {
             name: node.name.clone().unwrap_or_else(|| format!("nodes[{i}]")),
             parent: parents[i],
-            local,
+            local: local.as_mat4(),
             world: Mat4::IDENTITY,
             trs,
         });
     }
+    let mut world = vec![DMat4::IDENTITY; out.len()];
     let mut done = vec![false; out.len()];
     for start in 0..out.len() {
         let mut chain = vec![start];
@@ -61,12 +96,52 @@ pub(super) fn nodes(
             chain.push(p);
         }
         for &i in chain.iter().rev() {
-            let parent_world = out[i].parent.map_or(Mat4::IDENTITY, |p| out[p].world);
-            out[i].world = parent_world * out[i].local;
+            let parent_world = out[i].parent.map_or(DMat4::IDENTITY, |p| world[p]);
+            world[i] = parent_world * locals[i];
+            out[i].world = world[i].as_mat4();
             done[i] = true;
         }
     }
-    Ok(out)
+    Ok((out, world))
+}
+
+/// Moves the node hierarchy into the scene's local coordinates: every world matrix becomes
+/// `translate(−origin) · world` (from the `f64` ones), and so does every root's local transform,
+/// its TRS translation and the values of the translation channels that animate a root, so that
+/// posed and rest-pose meshes stay in the same local frame.
+pub(super) fn recentre(
+    nodes: &mut [Node],
+    world: &[DMat4],
+    animations: &mut [Animation],
+    origin: DVec3,
+) {
+    if origin == DVec3::ZERO {
+        return;
+    }
+    let shift = DMat4::from_translation(-origin);
+    for (node, w) in nodes.iter_mut().zip(world) {
+        node.world = (shift * *w).as_mat4();
+        if node.parent.is_none() {
+            node.local = node.world;
+            if let Some(t) = &mut node.trs {
+                t.translation = (t.translation.as_dvec3() - origin).as_vec3();
+            }
+        }
+    }
+    for ch in animations.iter_mut().flat_map(|a| &mut a.channels) {
+        let root = nodes.get(ch.node).is_some_and(|n| n.parent.is_none());
+        if ch.property != AnimatedProperty::Translation || !root {
+            continue;
+        }
+        // Cubic splines store (in-tangent, value, out-tangent) per key: only values move.
+        let (per_key, at) =
+            if ch.interpolation == Interpolation::CubicSpline { (9, 3) } else { (3, 0) };
+        for key in ch.values.chunks_exact_mut(per_key) {
+            let v = &mut key[at..at + 3];
+            let moved = Vec3::from_slice(v).as_dvec3() - origin;
+            v.copy_from_slice(&moved.as_vec3().to_array());
+        }
+    }
 }
 
 /// The nodes of the scene to load, parents before children: the default scene, else the first
@@ -192,7 +267,8 @@ pub(super) fn camera(
     path: &Path,
     root: &json::Root,
     order: &[usize],
-    nodes: &[Node],
+    world: &[DMat4],
+    origin: DVec3,
 ) -> Result<(Option<Camera>, usize)> {
     let mut orthographic = 0;
     for &n in order {
@@ -201,13 +277,13 @@ pub(super) fn camera(
             orthographic += 1;
             continue;
         };
-        let w = nodes[n].world;
-        let eye = w.transform_point3(Vec3::ZERO);
-        let forward = w.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let w = world[n];
+        let eye = (w.transform_point3(DVec3::ZERO) - origin).as_vec3();
+        let forward = w.transform_vector3(DVec3::NEG_Z).normalize_or_zero().as_vec3();
         let cam = Camera {
             eye,
             target: eye + forward,
-            up: w.transform_vector3(Vec3::Y),
+            up: w.transform_vector3(DVec3::Y).as_vec3(),
             fov_y_deg: p.yfov.to_degrees(),
         };
         cam.validate().map_err(|e| err(path, format!("cameras[{c}] (on nodes[{n}])"), e))?;

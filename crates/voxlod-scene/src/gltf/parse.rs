@@ -73,7 +73,8 @@ pub(super) fn split_glb<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], O
 }
 
 /// Deserializes the JSON; on failure, finds the top-level element (e.g. `meshes[0]`) at fault.
-pub(super) fn deserialize(path: &Path, text: &[u8]) -> Result<json::Root> {
+/// Also returns the JSON value, whose numbers are `f64` (gltf-json's node transforms are `f32`).
+pub(super) fn deserialize(path: &Path, text: &[u8]) -> Result<(json::Root, json::Value)> {
     let value: json::Value =
         json::deserialize::from_slice(text).map_err(|e| err(path, "JSON", e))?;
     let version = value.pointer("/asset/version").and_then(json::Value::as_str);
@@ -91,7 +92,7 @@ pub(super) fn deserialize(path: &Path, text: &[u8]) -> Result<json::Root> {
         }
     }
     match json::deserialize::from_slice::<json::Root>(text) {
-        Ok(root) => Ok(root),
+        Ok(root) => Ok((root, value)),
         Err(e) => {
             // gltf-json requires `scene.nodes`, which glTF 2.0 makes optional: retry with an
             // empty list before reporting.
@@ -105,7 +106,7 @@ pub(super) fn deserialize(path: &Path, text: &[u8]) -> Result<json::Root> {
                 }
             }
             if changed && let Ok(root) = json::deserialize::from_value::<json::Root>(patched) {
-                return Ok(root);
+                return Ok((root, value));
             }
             let element = locate(&value).unwrap_or_else(|| "JSON".to_owned());
             Err(err(path, element, e))

@@ -1,10 +1,10 @@
-//! One mesh primitive instanced by one node, to a world-space [`Mesh`]: triangle lists, strips
-//! and fans; morph targets at the node's (or mesh's) default weights; skinning at the rest
-//! pose; positions by the world matrix, normals by its inverse transpose, winding flipped where
-//! the transform mirrors.
+//! One mesh primitive instanced by one node, to a [`Mesh`]: triangle lists, strips and fans;
+//! morph targets at the node's (or mesh's) default weights; skinning at the rest pose; positions
+//! by the world matrix in `f64` (re-centred by the caller), normals by its inverse transpose,
+//! winding flipped where the transform mirrors.
 
 use ::gltf::json;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use json::accessor::{ComponentType as C, Type};
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
@@ -21,9 +21,9 @@ pub(super) struct Instance<'a> {
     /// The node.
     pub node: usize,
     /// The node's world matrix (ignored for a skinned mesh, as the specification says).
-    pub world: Mat4,
+    pub world: DMat4,
     /// The node's skin and its joint matrices (joint world × inverse bind matrix).
-    pub skin: Option<(usize, &'a [Mat4])>,
+    pub skin: Option<(usize, &'a [DMat4])>,
 }
 
 /// The triangles of an index list drawn with `mode`.
@@ -53,10 +53,20 @@ fn assemble(mode: Mode, idx: &[u32]) -> std::result::Result<Vec<[u32; 3]>, Strin
 }
 
 /// The inverse transpose of `m`'s linear part, or `None` when it is singular.
-fn normal_matrix(m: &Mat4) -> Option<Mat3> {
-    let m3 = Mat3::from_mat4(*m);
+fn normal_matrix(m: &DMat4) -> Option<DMat3> {
+    let m3 = DMat3::from_mat4(*m);
     let inv = m3.inverse();
     (m3.determinant() != 0.0 && inv.is_finite()).then(|| inv.transpose())
+}
+
+/// A primitive built by [`mesh`]: its positions in `f32` relative to its own re-centring origin
+/// (so that its normals are computed at full precision) and in world coordinates in `f64`, for
+/// the caller to re-centre on the scene's origin.
+pub(super) struct Built {
+    /// The mesh, positions relative to the primitive's own re-centring origin.
+    pub mesh: Mesh,
+    /// World positions in `f64`.
+    pub world: Vec<DVec3>,
 }
 
 /// Unit bind-space normals: the file's where they have a length, else area-weighted ones of the
@@ -84,7 +94,7 @@ pub(super) fn mesh(
     material: usize,
     uv_map: &UvMapping,
     report: &mut LoadReport,
-) -> Result<Option<Mesh>> {
+) -> Result<Option<Built>> {
     let gmesh = &data.root.meshes[m];
     let prim = &gmesh.primitives[p];
     let element = format!("meshes[{m}].primitives[{p}]");
@@ -206,7 +216,7 @@ pub(super) fn mesh(
 
     // Per-vertex transforms: the node's, or the skin's blend of joint matrices.
     let mut skin = None;
-    let per_vertex: Option<Vec<Mat4>> = match inst.skin {
+    let per_vertex: Option<Vec<DMat4>> = match inst.skin {
         None => None,
         Some((s, joint_mats)) => {
             let (Some(ja), Some(wa)) = (attr(Semantic::Joints(0)), attr(Semantic::Weights(0)))
@@ -259,7 +269,7 @@ pub(super) fn mesh(
                 let wn = [w[0] / sum, w[1] / sum, w[2] / sum, w[3] / sum];
                 let blend = (0..4)
                     .filter(|&k| wn[k] != 0.0)
-                    .fold(Mat4::ZERO, |acc, k| acc + joint_mats[j[k] as usize] * wn[k]);
+                    .fold(DMat4::ZERO, |acc, k| acc + joint_mats[j[k] as usize] * wn[k] as f64);
                 mats.push(blend);
                 binding.joints.push([j[0], j[1], j[2], j[3]].map(|x| x as u16));
                 binding.weights.push(wn);
@@ -271,8 +281,22 @@ pub(super) fn mesh(
         }
     };
     let transform = |v: usize| per_vertex.as_ref().map_or(&inst.world, |m| &m[v]);
-    for (v, p) in positions.iter_mut().enumerate() {
-        *p = transform(v).transform_point3(*p);
+    let world: Vec<DVec3> = positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| transform(v).transform_point3(p.as_dvec3()))
+        .collect();
+    // Positions relative to the primitive's own re-centring origin: finite in f32 unless the
+    // transform made a vertex non-finite or the primitive wider than f32 holds.
+    let bounds = world.iter().try_fold(None::<(DVec3, DVec3)>, |b, &p| {
+        p.is_finite().then(|| Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p)))))
+    });
+    let anchor = bounds
+        .flatten()
+        .and_then(|(lo, hi)| voxlod_format::origin::recentring_origin(lo, hi))
+        .unwrap_or(DVec3::ZERO);
+    for (p, w) in positions.iter_mut().zip(&world) {
+        *p = (*w - anchor).as_vec3();
     }
     if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
         return Err(err(
@@ -282,7 +306,7 @@ pub(super) fn mesh(
         ));
     }
     for t in &mut triangles {
-        if Mat3::from_mat4(*transform(t[0] as usize)).determinant() < 0.0 {
+        if DMat3::from_mat4(*transform(t[0] as usize)).determinant() < 0.0 {
             t.swap(1, 2);
         }
     }
@@ -306,12 +330,12 @@ pub(super) fn mesh(
                 Some(mats) => normal_matrix(&mats[v]),
                 None => world_nm,
             };
-            if let Some(unit) = nm.and_then(|nm| (nm * nf).try_normalize()) {
+            if let Some(unit) = nm.and_then(|nm| (nm * nf.as_dvec3()).as_vec3().try_normalize()) {
                 *out = unit;
                 computed -= 1;
             }
         }
     }
     report.normals_computed += computed;
-    Ok(Some(mesh))
+    Ok(Some(Built { mesh, world }))
 }

@@ -70,8 +70,10 @@ fn hierarchy_transforms_positions_normals_and_winding() {
         r#"[{"translation": [10, 0, 0], "children": [1]}, {"mesh": 0, "scale": [-1, 2, 1]}]"#;
     let (scene, report) = load_json(&doc(nodes, "", "")).unwrap();
     let m = &scene.meshes[0];
+    // A 1 × 2 triangle at x = 9..10 is far from the origin for its size: re-centred on x = 10.
+    assert_eq!(scene.origin, glam::DVec3::new(10.0, 0.0, 0.0));
     assert_eq!(
-        m.positions,
+        m.positions.iter().map(|&p| scene.to_world(p).as_vec3()).collect::<Vec<_>>(),
         vec![Vec3::new(10.0, 0.0, 0.0), Vec3::new(9.0, 0.0, 0.0), Vec3::new(10.0, 2.0, 0.0)]
     );
     // Mirrored: the winding is flipped so the geometric normal still agrees with the normal.
@@ -80,7 +82,9 @@ fn hierarchy_transforms_positions_normals_and_winding() {
     assert!(m.normals.iter().all(|&n| (n - Vec3::Z).length() < 1e-6));
     assert_eq!(report.normals_computed, 0);
     assert_eq!(scene.nodes[1].parent, Some(0));
-    assert_eq!(scene.nodes[1].world.w_axis.x, 10.0);
+    // Node matrices are in the same local frame as the meshes.
+    assert_eq!(scene.nodes[1].world.w_axis.x, 0.0);
+    assert_eq!(scene.nodes[0].local, scene.nodes[0].world);
     assert_eq!(scene.materials[m.material].base_color, glam::Vec4::ONE, "glTF default material");
 }
 

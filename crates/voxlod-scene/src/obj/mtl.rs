@@ -11,7 +11,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use crate::{AlphaMode, Error, Material, Result, Sampler, Texture, TextureRef, WrapMode};
 
@@ -137,18 +137,19 @@ pub(super) fn convert(
             }
         };
         let default_kd = if texture.is_some() { 1.0 } else { 0.8 };
-        let kd = m.diffuse.map_or(Vec3::splat(default_kd), Vec3::from_array);
-        let tr = m.unknown_param.get("Tr").and_then(|t| t.trim().parse::<f32>().ok());
-        let alpha = m.dissolve.or(tr.map(|t| 1.0 - t)).unwrap_or(1.0).clamp(0.0, 1.0);
+        // tobj reads MTL values in f64 (the loader enables its `use_f64` for positions).
+        let vec3 = |v: [f64; 3]| DVec3::from_array(v).as_vec3();
+        let kd = m.diffuse.map_or(Vec3::splat(default_kd), vec3);
+        let tr = m.unknown_param.get("Tr").and_then(|t| t.trim().parse::<f64>().ok());
+        let alpha = m.dissolve.or(tr.map(|t| 1.0 - t)).unwrap_or(1.0).clamp(0.0, 1.0) as f32;
         let lit = !matches!(m.illumination_model, Some(0 | 1));
-        let specular =
-            if lit { m.specular.map_or(Vec3::ZERO, Vec3::from_array) } else { Vec3::ZERO };
+        let specular = if lit { m.specular.map_or(Vec3::ZERO, vec3) } else { Vec3::ZERO };
         out.materials.push(Material {
             name: m.name.clone(),
             base_color: kd.max(Vec3::ZERO).extend(alpha),
             base_color_texture: texture,
             specular: specular.max(Vec3::ZERO),
-            shininess: m.shininess.unwrap_or(0.0).max(0.0),
+            shininess: m.shininess.unwrap_or(0.0).max(0.0) as f32,
             double_sided: false,
             alpha_mode: if alpha < 1.0 { AlphaMode::Blend } else { AlphaMode::Opaque },
         });
