@@ -7,6 +7,7 @@ mod cone;
 mod dynamic;
 mod export;
 mod heitz_neyret;
+mod import;
 mod scene_files;
 mod slicemap;
 mod volume;

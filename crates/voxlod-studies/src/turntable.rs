@@ -307,7 +307,9 @@ pub fn run(
             }));
         }
     }
-    let names = ["ground truth".to_string(), format!("voxels {res}³"), format!("Averages {res}³")];
+    // Panel labels in the report font's ASCII (no superscripts).
+    let names =
+        ["ground truth".to_string(), format!("voxels {res}^3"), format!("Averages {res}^3")];
 
     let mut times = [Duration::ZERO; 3];
     let mut mse: [Vec<f64>; 2] = Default::default();

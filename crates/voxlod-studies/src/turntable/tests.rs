@@ -24,7 +24,7 @@ fn each_frame_is_the_ground_truth_beside_the_voxel_panels_from_its_own_view() {
     let r = run(&config, &inputs, Backend::Cpu, &|_| {}).unwrap();
     assert_eq!((r.frames, r.animation.frames.len(), r.animation.frame_ms), (3, 3, 250));
     let labels: Vec<&str> = r.panels.iter().map(|p| p.panel.as_str()).collect();
-    assert_eq!(labels, ["ground truth", "voxels 12³", "Averages 12³"]);
+    assert_eq!(labels, ["ground truth", "voxels 12^3", "Averages 12^3"]);
 
     // Frame 1 rebuilt by hand: the camera a third of a turn round, each panel rendered alone,
     // composed the same way. The turntable's frame must be exactly that image.
@@ -56,7 +56,7 @@ fn each_frame_is_the_ground_truth_beside_the_voxel_panels_from_its_own_view() {
     let a_options =
         filtered::Options { width: w, height: h, ambient: config.ambient, shadows: true };
     let a = filtered::render(&mut cache, &view, &light, scene.background, &a_options).unwrap();
-    let panels = [("ground truth", gt.image), ("voxels 12³", b), ("Averages 12³", a)]
+    let panels = [("ground truth", gt.image), ("voxels 12^3", b), ("Averages 12^3", a)]
         .map(|(l, img)| LabeledImage::new(l, img.to_srgb8()));
     let expected = ImageGrid::new(3, panels.to_vec()).compose().unwrap();
     assert_eq!(r.animation.frames[1], expected);
