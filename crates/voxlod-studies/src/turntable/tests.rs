@@ -101,3 +101,19 @@ fn configurations_out_of_range_are_refused_by_name() {
         }
     }
 }
+
+#[test]
+fn the_report_adds_a_turntable_only_when_asked_with_its_own_settings() {
+    use crate::report::Config;
+    assert!(Config::quick().turntable.is_none() && Config::full().turntable.is_none());
+    let config = Config::quick().with_turntable(12);
+    let t = config.turntable.clone().unwrap();
+    let filtered = config.filtered.clone().unwrap();
+    assert_eq!((t.frames, t.panel), (12, (config.image_size, config.image_size)));
+    assert_eq!((t.gt_spp, t.ambient), (config.gt_spp, config.ambient));
+    let finest = filtered.resolutions.iter().copied().max().unwrap();
+    assert_eq!((t.resolution, t.rays), (finest, filtered.rays));
+    assert!(config.validate().is_ok());
+    let bad = Config::quick().with_turntable(0);
+    assert!(matches!(bad.validate(), Err(Error::InvalidConfig { study: "turntable", .. })));
+}
