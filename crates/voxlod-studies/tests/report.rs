@@ -34,6 +34,7 @@ fn tiny() -> Config {
             mesh_spp: 2,
         }),
         cone: None,
+        turntable: None,
         command: "the report test".into(),
     }
 }
