@@ -41,7 +41,8 @@
 //! [`read`] keeps the models, the palette and the placement of each shape node. Transforms are
 //! composed down the scene graph as affine maps (a parent's rotation `Rp` and translation `tp`
 //! applied to a child's `R`, `t`: `Rp·R`, `tp + Rp·t`); rotations are MagicaVoxel's signed
-//! permutation bytes ([`VoxRotation`]), reflections included. A voxel lands where
+//! permutation bytes ([`VoxRotation`]), reflections included; an `_r` that is not one is
+//! [`Error::Malformed`], naming the node. A voxel lands where
 //! [`rotation::place`] puts it: its centre, relative to the model's pivot `⌊size/2⌋`, rotated
 //! and translated. Unknown chunks (materials, layers, cameras) are skipped; models without a
 //! scene graph sit centred on the origin; a file without an `RGBA` chunk gets MagicaVoxel's
