@@ -44,6 +44,7 @@ fn run(cli: cli::Cli) -> anyhow::Result<()> {
         cli::Command::Dynamic(a) => commands::dynamic(&ui, a),
         cli::Command::HeitzNeyret(a) => commands::heitz_neyret(&ui, a),
         cli::Command::Info(a) => commands::info(a),
+        cli::Command::Import(a) => commands::import(&ui, a),
         cli::Command::Volume(a) => commands::volume(&ui, a),
         cli::Command::Slicemap(a) => commands::slicemap(&ui, a),
         cli::Command::Scenes => commands::scenes(),

@@ -57,6 +57,10 @@ pub enum Command {
     HeitzNeyret(HeitzNeyretArgs),
     /// Describe a file: .vxl, .binvox, .obj, .gltf, .glb or an image.
     Info(InfoArgs),
+    /// Import voxels from MagicaVoxel .vox (occupancy and palette colours; rotated and
+    /// translated models placed) or Mitsuba 3 .vol (density → opacity, albedo) into a .vxl of
+    /// Averages records.
+    Import(ImportArgs),
     /// Render a procedural volume preset (smoke, explosion, clouds) over a small mesh scene
     /// with metavoxels, and measure its trade: attenuation models against the exact reference,
     /// time and memory per metavoxel size.
@@ -86,12 +90,23 @@ pub struct ReportArgs {
     /// representation's rows; each row says which backend rendered it).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
     pub backend: BackendArg,
+    /// Add a turntable of N frames (1..=3600) to each scene section: the ground truth beside
+    /// the voxel baseline and Averages from an orbiting camera, as an animated PNG (off by
+    /// default: it costs more than a tenth of the default run).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=3600))]
+    pub turntable: Option<u16>,
 }
 
 impl Default for ReportArgs {
     /// What `voxlod` with no command runs: the same defaults as `voxlod report`.
     fn default() -> Self {
-        Self { full: false, output: PathBuf::from("out"), json: false, backend: BackendArg::Cpu }
+        Self {
+            full: false,
+            output: PathBuf::from("out"),
+            json: false,
+            backend: BackendArg::Cpu,
+            turntable: None,
+        }
     }
 }
 
@@ -218,6 +233,20 @@ pub struct RenderArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+    /// Also render a turntable of N frames (1..=3600): the camera orbiting the scene, each frame
+    /// the ground truth beside the voxel baseline and Averages (panels of --size at --spp), as
+    /// an animated PNG in a report written to `<output stem>-turntable/` next to the output.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=3600))]
+    pub turntable: Option<u16>,
+    /// Voxels along the longest axis of the turntable's voxel panels.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub turntable_res: u32,
+    /// Sampling lines per voxel of the turntable's Averages records.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub turntable_rays: u32,
+    /// How long each turntable frame shows, in milliseconds.
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u16).range(1..))]
+    pub turntable_ms: u16,
 }
 
 /// `voxlod compare`.
@@ -618,6 +647,52 @@ pub struct InfoArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `voxlod import`.
+#[derive(Debug, Args)]
+pub struct ImportArgs {
+    /// A MagicaVoxel .vox file or a Mitsuba 3 .vol density grid (one channel, extinction per
+    /// world unit).
+    #[arg(value_parser = parse::import_input)]
+    pub input: ImportInput,
+    /// Output .vxl file (Averages records: colour, opacity; or, with --f32, linear RGB and
+    /// opacity as four f32).
+    #[arg(short, long, value_parser = parse::vxl_output)]
+    pub output: PathBuf,
+    /// Edge of a voxel in world units (.vox only: the file stores whole voxels; a .vol's box
+    /// and cell count set it).
+    #[arg(long, value_parser = parse::positive_f64)]
+    pub voxel_size: Option<f64>,
+    /// The albedo grid of a .vol (three channels, same cells and box; default: NAME.albedo.vol
+    /// beside NAME.vol if it exists, else grey).
+    #[arg(long)]
+    pub albedo: Option<PathBuf>,
+    /// .vol only: store linear RGB and opacity as four f32 per voxel (record `4f32`) instead of
+    /// quantized Averages records.
+    #[arg(long)]
+    pub f32: bool,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// An import's input file and the format its extension names.
+#[derive(Clone, Debug)]
+pub struct ImportInput {
+    /// The file.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: ImportFormat,
+}
+
+/// The formats `voxlod import` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImportFormat {
+    /// MagicaVoxel `.vox`.
+    Vox,
+    /// Mitsuba 3 `.vol`.
+    Vol,
 }
 
 #[cfg(test)]

@@ -234,6 +234,36 @@ pub fn light(s: &str) -> Result<LightSpec> {
     Ok(LightSpec { light, point })
 }
 
+/// An import's input path, its format named by its extension (`.vox` or `.vol`).
+pub fn import_input(s: &str) -> Result<super::ImportInput, String> {
+    let path = std::path::PathBuf::from(s);
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let format = match ext.as_deref() {
+        Some("vox") => super::ImportFormat::Vox,
+        Some("vol") => super::ImportFormat::Vol,
+        _ => return Err(format!("'{s}' must end in .vox (MagicaVoxel) or .vol (Mitsuba 3)")),
+    };
+    Ok(super::ImportInput { path, format })
+}
+
+/// A `.vxl` output path.
+pub fn vxl_output(s: &str) -> Result<std::path::PathBuf, String> {
+    let path = std::path::PathBuf::from(s);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("vxl") => Ok(path),
+        _ => Err(format!("'{s}' must end in .vxl")),
+    }
+}
+
+/// A finite `f64` greater than zero.
+pub fn positive_f64(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("{v} is not finite and > 0"));
+    }
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,6 +1,8 @@
-//! `voxlod render`: the ground truth of a scene to a PNG (and optionally its G-buffer).
+//! `voxlod render`: the ground truth of a scene to a PNG (and optionally its G-buffer and a
+//! turntable: the ground truth beside the voxel baseline and Averages from an orbiting camera,
+//! as an animated PNG in a report).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -8,8 +10,9 @@ use glam::Vec3;
 use voxlod::cpu::raycast::Bvh;
 use voxlod::cpu::render::ground_truth::{self, GBuffer, GTexel};
 use voxlod::scene::{Image, Srgb8Image};
+use voxlod::studies::turntable::{self, TurntableConfig, TurntableInputs, TurntableResult};
 
-use super::{Ui, backend, load_scene, print_json};
+use super::{Ui, backend, load_scene, print_json, write_report};
 use crate::cli::{RenderArgs, parse};
 
 #[derive(serde::Serialize)]
@@ -26,6 +29,17 @@ struct Summary {
     backend: String,
     output: String,
     scene_origin: [f64; 3],
+    /// With `--turntable`: the report, the animated PNG and the turntable's measurements.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    turntable: Option<TurntableSummary>,
+}
+
+#[derive(serde::Serialize)]
+struct TurntableSummary {
+    report: String,
+    animation: String,
+    #[serde(flatten)]
+    result: TurntableResult,
 }
 
 /// Renders the ground truth of a scene.
@@ -80,6 +94,40 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
     if args.gbuffer {
         write_gbuffer(&out.gbuffer, &args.output)?;
     }
+    let turntable = match args.turntable {
+        None => None,
+        Some(frames) => {
+            let config = TurntableConfig {
+                frames: frames as usize,
+                panel: (width, height),
+                gt_spp: args.spp,
+                seed: args.seed,
+                resolution: args.turntable_res,
+                rays: args.turntable_rays,
+                frame_ms: args.turntable_ms,
+                ambient: options.ambient,
+            };
+            let inputs = TurntableInputs {
+                scene: &scene,
+                geometry: &geometry,
+                bvh: &bvh,
+                camera,
+                label: &args.scene,
+            };
+            let progress = |m: &str| spinner.set_message(m.to_string());
+            let result = turntable::run(&config, &inputs, super::on(&gpu), &progress)
+                .context("rendering the turntable")?;
+            let dir = turntable_dir(&args.output);
+            spinner.set_message(format!("writing {}", dir.display()));
+            let title = format!("Turntable of {}", args.scene);
+            let written = write_report(&title, &dir, |r| result.add_to_report(r, "turntable"))?;
+            Some(TurntableSummary {
+                report: written.markdown.display().to_string(),
+                animation: dir.join("assets").join("turntable.png").display().to_string(),
+                result,
+            })
+        }
+    };
     spinner.finish_and_clear();
     let rays = width as f64 * height as f64 * args.spp as f64;
     let summary = Summary {
@@ -95,6 +143,7 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         backend: backend_name,
         output: args.output.display().to_string(),
         scene_origin: scene.origin.to_array(),
+        turntable,
     };
     if args.json {
         return print_json("render", &summary);
@@ -119,7 +168,21 @@ pub fn render(ui: &Ui, args: RenderArgs) -> Result<()> {
         summary.rays_per_second / 1e6,
         summary.output
     );
+    if let Some(t) = &summary.turntable {
+        let r = &t.result;
+        println!(
+            "turntable: {} frames of {}×{} panels in {:.1} s → {} (report {})",
+            r.frames, r.panel[0], r.panel[1], r.elapsed_s, t.animation, t.report
+        );
+        println!("{}", r.table()?.to_markdown());
+    }
     Ok(())
+}
+
+/// Where the turntable's report goes: `<stem>-turntable/` next to the output PNG.
+fn turntable_dir(output: &Path) -> PathBuf {
+    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
+    output.with_file_name(format!("{stem}-turntable"))
 }
 
 /// Writes `<stem>.depth.png` (normalized distance, near = white), `<stem>.normal.png`

@@ -10,7 +10,10 @@ use crate::cli::ReportArgs;
 /// tables.
 pub fn report(ui: &Ui, args: ReportArgs) -> Result<()> {
     let preset = if args.full { Config::full() } else { Config::quick() };
-    let config = Config { command: super::invocation(), ..preset };
+    let mut config = Config { command: super::invocation(), ..preset };
+    if let Some(frames) = args.turntable {
+        config = config.with_turntable(frames as usize);
+    }
     // No adapter is an error, never a fall-back to the CPU.
     let gpu = backend(args.backend)?;
     let on = super::on(&gpu);

@@ -8,6 +8,7 @@ mod dynamic;
 mod export;
 mod far_from_origin;
 mod heitz_neyret;
+mod import;
 mod scene_files;
 mod slicemap;
 mod volume;

@@ -124,6 +124,12 @@ pub enum Error {
         #[source]
         source: voxlod_scene::Error,
     },
+    /// An animation that cannot be encoded or decoded (an APNG error, frames it cannot read).
+    #[error("animated PNG: {reason}")]
+    Animation {
+        /// What went wrong.
+        reason: String,
+    },
     /// Serializing the JSON summary failed.
     #[error("serializing {what} as JSON: {source}")]
     Json {

@@ -9,7 +9,8 @@
 //!   the per-pixel [`SsimMap`].
 //! - [`heatmap`]: per-pixel absolute error (and SSIM) as colour heat maps for reports.
 //! - [`report`]: markdown tables, labelled PNG image grids, SVG plots of error against cost,
-//!   and a JSON summary, written atomically.
+//!   animations, and a JSON summary, written atomically.
+//! - [`animation`]: animated PNG (APNG) encoding and decoding of frame sequences (turntables).
 //! - [`patterns`]: deterministic integer test images shared with the Python cross-check.
 //! - [`json`]: JSON for infinite and NaN numbers (a PSNR of identical images is `+∞`).
 //!
@@ -76,7 +77,8 @@
 //! ([`Error::PixelCount`]); a parameter out of its domain ([`Error::InvalidParameter`]); a table
 //! row of the wrong length ([`Error::RowLength`]); a report asset name that is invalid or
 //! repeated ([`Error::InvalidAssetName`], [`Error::DuplicateAsset`]); an image grid or plot that
-//! cannot be drawn ([`Error::InvalidGrid`], [`Error::Plot`]); and a failed PNG encoding, JSON
+//! cannot be drawn ([`Error::InvalidGrid`], [`Error::Plot`]); an animation that cannot be encoded
+//! or decoded ([`Error::Animation`]); and a failed PNG encoding, JSON
 //! serialization or file write ([`Error::Encode`], [`Error::Json`], [`Error::Write`]). A report
 //! is checked before anything is written.
 //!
@@ -96,6 +98,7 @@
 
 #![deny(missing_docs)]
 
+pub mod animation;
 mod error;
 pub mod heatmap;
 pub mod json;

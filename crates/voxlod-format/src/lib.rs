@@ -52,9 +52,10 @@
 //! | [`BrickMap`] | occupied 8³ bricks (a 512-bit mask and a packed run of values each), sorted by Morton code; iteration in global Morton order |
 //! | [`vxl`] | [`vxl::write`] / [`vxl::read`] / [`vxl::read_info`]; [`VxlRecord`], the trait a storable record implements; the zero-sized [`Occupancy`] |
 //! | [`binvox`] | occupancy export (padded to a cube, world positions kept) and strict import of versions 1 and 2 |
-//! | [`vox`] | MagicaVoxel export (occupancy, a 255-colour palette by median cut + k-means with its measured error, 256³ models placed by the scene graph) and import |
+//! | [`vox`] | MagicaVoxel export (occupancy, a 255-colour palette by median cut + k-means with its measured error, 256³ models placed by the scene graph) and import (rotations, translations and the default palette applied) |
 //! | [`vol`] | Mitsuba 3 `.vol` grid volumes (dense `float32`, 1/3/6 channels): density (extinction) and albedo of an Averages grid; read and write |
 //! | [`nvdb`] | NanoVDB `.nvdb` (NanoVDB 32.4's flat layout): sparse `float` and `Vec3f` grids with node statistics, index-to-world map (index = voxel centre) and full checksum; density (extinction) and colour of an Averages grid; read and write |
+//! | [`import`] | `.vox` scenes and `.vol` density (+ albedo) grids as Averages records over a grid, for `.vxl` |
 //! | [`records`] | the Averages, SGGX, virtual-mesh and specular records and the adaptive grid's reference, with their quantizers ([`records::quant`]) |
 //! | [`origin`] | [`origin::recentring_origin`]: the `f64` offset that brings a box far from the world origin next to it (0 for a box that reaches near the origin), so its coordinates fit `f32` |
 //! | [`io`] | [`io::write_atomic`]: a temporary file renamed over the target, so a failure never leaves half a file |
@@ -112,6 +113,7 @@ pub mod binvox;
 pub mod brickmap;
 mod error;
 pub mod grid;
+pub mod import;
 pub mod io;
 pub mod morton;
 pub mod nvdb;

@@ -38,15 +38,20 @@
 //! (over 2³¹ bytes, about 5·10⁸ voxels) are [`Error::Unrepresentable`].
 //!
 //! # Import
-//! [`read`] keeps the models, the palette and the placement of each shape node. Translations are
-//! composed down the scene graph; a rotation other than the identity is
-//! [`Error::Unsupported`]; unknown chunks (materials, layers, cameras) are skipped; models
-//! without a scene graph sit centred on the origin. A model's minimum corner is its translation
-//! minus `⌊size/2⌋`. [`VoxFile::to_brick_map`] gives back voxlod's axes and a brick map of
-//! colour indices.
+//! [`read`] keeps the models, the palette and the placement of each shape node. Transforms are
+//! composed down the scene graph as affine maps (a parent's rotation `Rp` and translation `tp`
+//! applied to a child's `R`, `t`: `Rp·R`, `tp + Rp·t`); rotations are MagicaVoxel's signed
+//! permutation bytes ([`VoxRotation`]), reflections included; an `_r` that is not one is
+//! [`Error::Malformed`], naming the node. A voxel lands where
+//! [`rotation::place`] puts it: its centre, relative to the model's pivot `⌊size/2⌋`, rotated
+//! and translated. Unknown chunks (materials, layers, cameras) are skipped; models without a
+//! scene graph sit centred on the origin; a file without an `RGBA` chunk gets MagicaVoxel's
+//! default palette ([`default_palette`]). [`VoxFile::to_brick_map`] gives back voxlod's axes and
+//! a brick map of colour indices.
 
 pub mod palette;
 mod read;
+pub mod rotation;
 #[cfg(test)]
 mod tests;
 
@@ -56,7 +61,8 @@ use std::path::Path;
 use glam::{IVec3, UVec3};
 
 pub use palette::{LLOYD_ITERATIONS, MAX_COLORS, Palette, PaletteError};
-pub use read::{decode, read};
+pub use read::{decode, default_palette, read};
+pub use rotation::VoxRotation;
 
 use crate::{BrickMap, Error, Result};
 
@@ -85,7 +91,9 @@ pub struct VoxModel {
 pub struct VoxInstance {
     /// Index into [`VoxFile::models`].
     pub model: u32,
-    /// Translation of the model's centre (sum of the transform nodes above it).
+    /// Rotation about the model's pivot (the product of the transform nodes above it).
+    pub rotation: VoxRotation,
+    /// Translation of the model's pivot (the transform nodes above it, composed).
     pub translation: IVec3,
 }
 
@@ -99,21 +107,21 @@ pub struct VoxFile {
     /// Where each model is shown (one per shape node; one per model without a scene graph).
     pub instances: Vec<VoxInstance>,
     /// RGBA of colour index `i` at `palette[i]`; `palette[0]` (empty) is zero. MagicaVoxel's
-    /// default palette is not filled in when a file has no `RGBA` chunk.
+    /// default palette ([`default_palette`]) when the file has no `RGBA` chunk.
     pub palette: [[u8; 4]; 256],
 }
 
 impl VoxFile {
-    /// Every voxel of every instance: its MagicaVoxel world coordinate (the model's minimum
-    /// corner `translation − ⌊size/2⌋` plus its coordinate) and colour index.
+    /// Every voxel of every instance: its MagicaVoxel world coordinate ([`rotation::place`];
+    /// without rotation, the model's minimum corner `translation − ⌊size/2⌋` plus its
+    /// coordinate) and colour index.
     pub fn world_voxels(&self) -> impl Iterator<Item = (IVec3, u8)> + '_ {
         self.instances.iter().flat_map(move |inst| {
             let model = &self.models[inst.model as usize];
-            let min = inst.translation - (model.size / 2).as_ivec3();
-            model
-                .voxels
-                .iter()
-                .map(move |v| (min + IVec3::new(v[0] as i32, v[1] as i32, v[2] as i32), v[3]))
+            model.voxels.iter().map(move |v| {
+                let p = UVec3::new(v[0] as u32, v[1] as u32, v[2] as u32);
+                (rotation::place(p, model.size, inst.rotation, inst.translation), v[3])
+            })
         })
     }
 

@@ -51,6 +51,7 @@
 //! | [`slicemap`] | slicemaps (Eisemann and Décoret 2006): holes against the exact voxelizers, transmittance shadow maps against ray-traced transmittance, the traversed volume for refraction against ray-cast intervals |
 //! | [`cone`] | voxel cone tracing on the sparse voxel octree: AO and indirect light against ray-traced references, light leaking, and ([`cone::lod`]) primary visibility with level of detail by distance |
 //! | [`heitz_neyret`] | Heitz and Neyret's (2012) pre-filtered surface statistics with coverage masks against alpha blending over distance: error, silhouettes, colour at grazing angles, cost, bytes per node |
+//! | [`turntable`] | a camera orbiting the scene, each frame the ground truth beside the voxel baseline and Averages (labelled panels) as an animated PNG, with each panel's error over the turn |
 //!
 //! Shared pieces: [`scenes`] (scene specs, with the embedded models), [`views`] (orbiting
 //! cameras), [`spread`] (mean and range over views), [`alloc`] (peak heap memory per stage),
@@ -112,6 +113,7 @@ pub mod report;
 pub mod scenes;
 pub mod slicemap;
 pub mod spread;
+pub mod turntable;
 pub mod views;
 pub mod volume;
 

@@ -4,7 +4,8 @@
 //! from the same cameras, score it against the ground truth on 8-bit sRGB, and collect time and
 //! peak memory per stage ([`crate::baseline`], [`crate::filtered`]); then the procedural-volume
 //! study ([`crate::volume`]) and the cone-tracing study ([`crate::cone`]), all into one
-//! [`Report`].
+//! [`Report`]. On request ([`Config::with_turntable`]), each scene section ends with a turntable
+//! ([`crate::turntable`]): off by default, as it costs more than a tenth of the default run.
 //!
 //! Each scene is a section with its own time budget: when a section runs over, its remaining
 //! resolutions are skipped and the report says so.
@@ -19,6 +20,7 @@ use crate::backend::{self, Backend};
 use crate::baseline::{self, BaselineRow, SceneResult};
 use crate::cone::{self, ConeConfig, ConeResult};
 use crate::filtered::FilteredConfig;
+use crate::turntable::{self, TurntableConfig, TurntableInputs, TurntableResult};
 use crate::volume::{self, VolumeConfig, VolumeResult};
 
 /// One scene of the experiment.
@@ -61,6 +63,8 @@ pub struct Config {
     pub volume: Option<VolumeConfig>,
     /// The voxel cone tracing section after the volume (None: none).
     pub cone: Option<ConeConfig>,
+    /// A turntable at the end of each scene section (None: none, the default).
+    pub turntable: Option<TurntableConfig>,
     /// The command line that runs this configuration, named at the top of the report.
     pub command: String,
 }
@@ -89,8 +93,31 @@ impl Config {
                 ..VolumeConfig::quick("smoke")
             }),
             cone: Some(ConeConfig::quick()),
+            turntable: None,
             command: "cargo run --release".into(),
         }
+    }
+
+    /// This configuration with a turntable of `frames` frames at the end of each scene section:
+    /// panels of the report's image size, its ground truth's rays per pixel and ambient term;
+    /// the voxel panels at the finest resolution of the filtered comparison (else 64³) with its
+    /// sampling lines per voxel ([`TurntableConfig::quick`] otherwise).
+    pub fn with_turntable(self, frames: usize) -> Self {
+        let quick = TurntableConfig::quick();
+        let (resolution, rays) = match &self.filtered {
+            Some(f) => (f.resolutions.iter().copied().max().unwrap_or(64), f.rays),
+            None => (quick.resolution, quick.rays),
+        };
+        let turntable = TurntableConfig {
+            frames,
+            panel: (self.image_size, self.image_size),
+            gt_spp: self.gt_spp,
+            resolution,
+            rays,
+            ambient: self.ambient,
+            ..quick
+        };
+        Self { turntable: Some(turntable), ..self }
     }
 
     /// Paper-scale settings: the baseline at 64³ to 256³, the filtered representations at 128³
@@ -154,6 +181,9 @@ impl Config {
         if let Some(c) = &self.cone {
             c.validate()?;
         }
+        if let Some(t) = &self.turntable {
+            t.validate()?;
+        }
         Ok(())
     }
 }
@@ -175,6 +205,8 @@ pub struct Outcome {
     pub volume: Option<VolumeResult>,
     /// The cone-tracing section's result, if the configuration asked for one.
     pub cone: Option<ConeResult>,
+    /// The turntable of each scene, if the configuration asked for them.
+    pub turntables: Vec<TurntableResult>,
     /// The report (not yet written).
     pub report: Report,
     /// Wall time of the whole run.
@@ -205,10 +237,27 @@ pub fn run(
     }
     report.text(text);
     let mut scenes = Vec::new();
+    let mut turntables = Vec::new();
     for case in &config.scenes {
         let result = baseline::run_scene(case, config, kernels.as_ref(), progress)?;
         result.write_section(&mut report, config)?;
         scenes.push(result);
+        if let Some(tc) = &config.turntable {
+            let scene = crate::scenes::load(&case.spec)?;
+            let geometry = scene.geometry();
+            let bvh = voxlod_cpu::raycast::Bvh::new(&geometry)?;
+            let inputs = TurntableInputs {
+                scene: &scene,
+                geometry: &geometry,
+                bvh: &bvh,
+                camera: scene.default_camera()?,
+                label: &case.label,
+            };
+            let t = turntable::run(tc, &inputs, backend, progress)?;
+            report.heading(3, format!("{}: turntable", case.label));
+            t.add_to_report(&mut report, &format!("turntable-{}", case.label))?;
+            turntables.push(t);
+        }
     }
     summary_plots(&mut report, &scenes);
     let volume = match &config.volume {
@@ -229,7 +278,7 @@ pub fn run(
         }
         None => None,
     };
-    Ok(Outcome { scenes, volume, cone, report, elapsed: start.elapsed() })
+    Ok(Outcome { scenes, volume, cone, turntables, report, elapsed: start.elapsed() })
 }
 
 fn intro(config: &Config) -> String {

@@ -37,6 +37,7 @@ fn tiny() -> Config {
             mesh_spp: 2,
         }),
         cone: None,
+        turntable: None,
         command: "the report test".into(),
     }
 }

@@ -1,7 +1,8 @@
 //! Experiment reports, generated, never typed: a [`Report`] collects [`Section`]s — headings,
-//! markdown text, [`Table`]s, [`ImageGrid`]s, [`Plot`]s — and [`Report::write`] puts
-//! `report.md`, `report.json` (every table, plot and image grid, numbers at full precision) and
-//! `assets/` (SVG plots, PNG grids and full-size PNGs) into a directory, each file atomically.
+//! markdown text, [`Table`]s, [`ImageGrid`]s, [`Plot`]s, [`Animation`]s — and [`Report::write`]
+//! puts `report.md`, `report.json` (every table, plot, image grid and animation, numbers at full
+//! precision) and `assets/` (SVG plots, PNG grids and full-size PNGs, animated PNGs) into a
+//! directory, each file atomically.
 //!
 //! ```no_run
 //! use voxlod_eval::report::{Column, NumberFormat, Plot, Report, Series, Table};
@@ -36,9 +37,12 @@ use std::path::{Path, PathBuf};
 
 pub use grid::{ImageGrid, LabeledImage, MAX_GRID_PIXELS};
 pub use plot::{PLOTTABLE_LIMIT, Plot, RenderedPlot, Series, SeriesStyle, SkippedPoint};
-pub use summary::{ImagesSummary, PlotSummary, SeriesSummary, Summary, TableSummary};
+pub use summary::{
+    AnimationSummary, ImagesSummary, PlotSummary, SeriesSummary, Summary, TableSummary,
+};
 pub use table::{Align, Cell, Column, NumberFormat, Table, format_number};
 
+use crate::animation::Animation;
 use crate::{Error, Result};
 
 /// One part of a report, in order. More kinds will be added: match with a wildcard arm.
@@ -82,6 +86,16 @@ pub enum Section {
         name: String,
         /// The plot.
         plot: Plot,
+    },
+    /// An animation, written as the animated PNG `assets/<name>.png` and shown in place (viewers
+    /// without APNG support show its first frame).
+    Animation {
+        /// Asset name: letters, digits, `-`, `_`; unique within the report.
+        name: String,
+        /// Caption under it.
+        caption: String,
+        /// The frames.
+        animation: Animation,
     },
 }
 
@@ -159,10 +173,21 @@ impl Report {
         self.push(Section::Plot { name: name.into(), plot })
     }
 
+    /// Appends an animation (see [`Section::Animation`]).
+    pub fn animation(
+        &mut self,
+        name: impl Into<String>,
+        caption: impl Into<String>,
+        animation: Animation,
+    ) -> &mut Self {
+        self.push(Section::Animation { name: name.into(), caption: caption.into(), animation })
+    }
+
     /// Writes `report.md`, `report.json` and `assets/` into `dir` (created if missing). Every
     /// file is written atomically; assets first and `report.md` last, so a report never links
     /// to an asset that was not written. Fails before writing anything if an asset name is
-    /// invalid or repeated, a grid cannot be composed or a plot cannot be drawn.
+    /// invalid or repeated, a grid cannot be composed, a plot cannot be drawn or an animation
+    /// cannot be encoded.
     pub fn write(&self, dir: &Path) -> Result<WrittenReport> {
         self.check_names()?;
         let mut files: Vec<(String, Vec<u8>)> = Vec::new();
@@ -221,6 +246,18 @@ impl Report {
                     summary.add_plot(&heading, name, plot, &rendered.skipped);
                     skipped_points.extend(rendered.skipped);
                 }
+                Section::Animation { name, caption, animation } => {
+                    files.push((format!("{name}.png"), crate::animation::encode_apng(animation)?));
+                    let (w, h) = animation.size();
+                    md += &format!(
+                        "![{0}](assets/{name}.png)\n\n*{0}* — animated PNG: {1} frames of {w}×{h}, \
+                         {2} ms each, looping.\n",
+                        one_line(caption),
+                        animation.frames.len(),
+                        animation.frame_ms
+                    );
+                    summary.add_animation(&heading, name, caption, animation);
+                }
             }
         }
         let write = |path: PathBuf, bytes: &[u8]| -> Result<PathBuf> {
@@ -248,7 +285,9 @@ impl Report {
         let mut seen = HashSet::new();
         for section in &self.sections {
             let name = match section {
-                Section::Images { name, .. } | Section::Plot { name, .. } => name,
+                Section::Images { name, .. }
+                | Section::Plot { name, .. }
+                | Section::Animation { name, .. } => name,
                 Section::Data { name, arrays, .. } => {
                     let mut files = HashSet::new();
                     for a in arrays {

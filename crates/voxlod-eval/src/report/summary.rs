@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::{ImageGrid, Plot, SkippedPoint, Table};
+use crate::animation::Animation;
 use crate::json;
 
 /// The JSON summary of a report (`report.json`).
@@ -20,6 +21,30 @@ pub struct Summary {
     pub plots: Vec<PlotSummary>,
     /// Every image grid, in report order.
     pub images: Vec<ImagesSummary>,
+    /// Every animation, in report order.
+    #[serde(default)]
+    pub animations: Vec<AnimationSummary>,
+}
+
+/// An animation in the summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AnimationSummary {
+    /// The asset name.
+    pub name: String,
+    /// The heading it appeared under.
+    pub section: String,
+    /// The caption.
+    pub caption: String,
+    /// The animated PNG, relative to the report directory.
+    pub file: String,
+    /// Number of frames.
+    pub frames: usize,
+    /// Frame width in pixels.
+    pub width: u32,
+    /// Frame height in pixels.
+    pub height: u32,
+    /// How long each frame shows, in milliseconds.
+    pub frame_ms: u16,
 }
 
 /// A table in the summary.
@@ -85,7 +110,13 @@ pub struct ImagesSummary {
 impl Summary {
     /// An empty summary.
     pub(crate) fn new(title: &str) -> Self {
-        Self { title: title.to_owned(), tables: vec![], plots: vec![], images: vec![] }
+        Self {
+            title: title.to_owned(),
+            tables: vec![],
+            plots: vec![],
+            images: vec![],
+            animations: vec![],
+        }
     }
 
     pub(crate) fn add_table(&mut self, section: &str, table: &Table) {
@@ -122,6 +153,26 @@ impl Summary {
                 .iter()
                 .map(|p| serde_json::to_value(p).unwrap_or(Value::Null))
                 .collect(),
+        });
+    }
+
+    pub(crate) fn add_animation(
+        &mut self,
+        section: &str,
+        name: &str,
+        caption: &str,
+        animation: &Animation,
+    ) {
+        let (width, height) = animation.size();
+        self.animations.push(AnimationSummary {
+            name: name.to_owned(),
+            section: section.to_owned(),
+            caption: caption.to_owned(),
+            file: format!("assets/{name}.png"),
+            frames: animation.frames.len(),
+            width,
+            height,
+            frame_ms: animation.frame_ms,
         });
     }
 

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use glam::{IVec3, UVec3};
 
-use super::{IDENTITY_ROTATION, MAGIC, MAX_VERSION, MODEL_EDGE, VoxFile, VoxInstance, VoxModel};
+use super::{MAGIC, MAX_VERSION, MODEL_EDGE, VoxFile, VoxInstance, VoxModel, VoxRotation};
 use crate::{Error, Result};
 
 /// Deepest scene graph followed (MagicaVoxel nests groups a few levels deep).
@@ -14,10 +14,13 @@ const MAX_GRAPH_DEPTH: usize = 64;
 /// Most shape instances a scene graph may place (groups may share children, so a small file
 /// could otherwise name exponentially many).
 const MAX_INSTANCES: usize = 1 << 20;
+/// Largest translation component kept (composed down the graph): 2³⁰ voxels, far beyond any
+/// grid voxlod builds, so that placing a voxel never overflows `i32`.
+const MAX_TRANSLATION: i64 = 1 << 30;
 
 /// A scene-graph node.
 enum Node {
-    Transform { child: i32, translation: IVec3 },
+    Transform { child: i32, rotation: VoxRotation, translation: IVec3 },
     Group { children: Vec<i32> },
     Shape { models: Vec<i32> },
 }
@@ -104,7 +107,7 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<VoxFile> {
     let mut pos = 20 + n as usize;
     let mut sizes: Vec<(usize, UVec3)> = Vec::new();
     let mut models = Vec::new();
-    let mut palette = [[0u8; 4]; 256];
+    let mut palette = None;
     let mut nodes: HashMap<i32, (usize, Node)> = HashMap::new();
     while pos < bytes.len() {
         if bytes.len() - pos < 12 {
@@ -157,9 +160,11 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<VoxFile> {
             }
             b"RGBA" => {
                 let b = c.take(1024, "palette")?;
+                let mut p = [[0u8; 4]; 256];
                 for e in 0..255 {
-                    palette[e + 1].copy_from_slice(&b[4 * e..4 * e + 4]);
+                    p[e + 1].copy_from_slice(&b[4 * e..4 * e + 4]);
                 }
+                palette = Some(p);
             }
             b"nTRN" => {
                 let node = c.i32("node id")?;
@@ -169,29 +174,39 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<VoxFile> {
                 let _layer = c.i32("layer id")?;
                 let frames = c.count("frame count", 4)?;
                 let mut translation = IVec3::ZERO;
+                let mut rotation = VoxRotation::IDENTITY;
+                // Animation frames after the first are not shown by a still scene: skipped.
                 for f in 0..frames {
                     let at = c.pos;
                     for (key, value) in c.dict()? {
                         match key.as_str() {
                             "_t" if f == 0 => {
-                                translation = parse_translation(&value)
-                                    .ok_or_else(|| bad(at, format!("translation {value:?}")))?
+                                translation = parse_translation(&value).ok_or_else(|| {
+                                    bad(at, format!("translation {value:?} of node {node}"))
+                                })?
                             }
-                            "_r" if f == 0
-                                && value.trim().parse::<u8>().ok() != Some(IDENTITY_ROTATION) =>
-                            {
-                                return Err(Error::Unsupported {
-                                    path: path.to_owned(),
-                                    format: "vox",
-                                    offset: at as u64,
-                                    feature: format!("rotation {value:?} of transform node {node}"),
-                                });
+                            "_r" if f == 0 => {
+                                rotation = value
+                                    .trim()
+                                    .parse::<u8>()
+                                    .ok()
+                                    .and_then(VoxRotation::from_byte)
+                                    .ok_or_else(|| {
+                                        bad(
+                                            at,
+                                            format!(
+                                                "rotation {value:?} of node {node} is not a \
+                                                 signed permutation byte"
+                                            ),
+                                        )
+                                    })?
                             }
                             _ => {}
                         }
                     }
                 }
-                insert(&mut nodes, node, pos, Node::Transform { child, translation }, path)?;
+                let transform = Node::Transform { child, rotation, translation };
+                insert(&mut nodes, node, pos, transform, path)?;
             }
             b"nGRP" => {
                 let node = c.i32("node id")?;
@@ -220,13 +235,19 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<VoxFile> {
     }
     let instances = if nodes.is_empty() {
         (0..models.len() as u32)
-            .map(|model| VoxInstance { model, translation: IVec3::ZERO })
+            .map(|model| VoxInstance {
+                model,
+                rotation: VoxRotation::IDENTITY,
+                translation: IVec3::ZERO,
+            })
             .collect()
     } else {
         let mut out = Vec::new();
-        walk(&nodes, 0, IVec3::ZERO, 0, models.len(), &mut out, path)?;
+        let root = Placement { rotation: VoxRotation::IDENTITY, translation: IVec3::ZERO };
+        walk(&nodes, 0, root, 0, models.len(), &mut out, path)?;
         out
     };
+    let palette = palette.unwrap_or_else(default_palette);
     Ok(VoxFile { version, models, instances, palette })
 }
 
@@ -249,9 +270,11 @@ fn show(id: &[u8; 4]) -> String {
     id.iter().map(|&b| if b.is_ascii_graphic() || b == b' ' { b as char } else { '?' }).collect()
 }
 
+/// `"x y z"`, each within ±[`MAX_TRANSLATION`].
 fn parse_translation(s: &str) -> Option<IVec3> {
     let v: Vec<i32> = s.split_ascii_whitespace().map(|x| x.parse().ok()).collect::<Option<_>>()?;
-    (v.len() == 3).then(|| IVec3::new(v[0], v[1], v[2]))
+    let fits = v.iter().all(|c| (*c as i64).abs() <= MAX_TRANSLATION);
+    (v.len() == 3 && fits).then(|| IVec3::new(v[0], v[1], v[2]))
 }
 
 fn insert(
@@ -267,10 +290,60 @@ fn insert(
     Ok(())
 }
 
+/// MagicaVoxel's default palette, which applies when a file has no `RGBA` chunk (entry 0,
+/// empty, is zero). As the format's specification lists it: entries 1–215 are the 6×6×6 cube of
+/// the levels FF, CC, 99, 66, 33, 00 without black, blue changing fastest, then red; then ten
+/// shades each of red, green, blue and grey (EE, DD, BB, AA, 88, 77, 55, 44, 22, 11). All
+/// opaque.
+///
+/// ```
+/// let p = voxlod_format::vox::default_palette();
+/// assert_eq!((p[0], p[1], p[2]), ([0; 4], [255, 255, 255, 255], [255, 255, 204, 255]));
+/// assert_eq!(p[255], [0x11, 0x11, 0x11, 255]);
+/// ```
+pub fn default_palette() -> [[u8; 4]; 256] {
+    const CUBE: [u8; 6] = [0xFF, 0xCC, 0x99, 0x66, 0x33, 0x00];
+    const RAMP: [u8; 10] = [0xEE, 0xDD, 0xBB, 0xAA, 0x88, 0x77, 0x55, 0x44, 0x22, 0x11];
+    let mut p = [[0u8; 4]; 256];
+    let mut i = 1;
+    for r in CUBE {
+        for g in CUBE {
+            for b in CUBE {
+                if (r, g, b) != (0, 0, 0) {
+                    p[i] = [r, g, b, 255];
+                    i += 1;
+                }
+            }
+        }
+    }
+    for channel in [Some(0), Some(1), Some(2), None] {
+        for v in RAMP {
+            p[i] = match channel {
+                Some(c) => {
+                    let mut rgba = [0, 0, 0, 255];
+                    rgba[c] = v;
+                    rgba
+                }
+                None => [v, v, v, 255],
+            };
+            i += 1;
+        }
+    }
+    debug_assert_eq!(i, 256);
+    p
+}
+
+/// The rotation and translation composed from the root down to a node.
+#[derive(Clone, Copy)]
+struct Placement {
+    rotation: VoxRotation,
+    translation: IVec3,
+}
+
 fn walk(
     nodes: &HashMap<i32, (usize, Node)>,
     id: i32,
-    t: IVec3,
+    t: Placement,
     depth: usize,
     model_count: usize,
     out: &mut Vec<VoxInstance>,
@@ -287,17 +360,21 @@ fn walk(
         ));
     }
     match node {
-        Node::Transform { child, translation } => {
-            let sum = t.as_i64vec3() + translation.as_i64vec3();
-            if sum.abs().max_element() > i32::MAX as i64 {
+        Node::Transform { child, rotation, translation } => {
+            // The parent's affine map applied to this node's: R = Rp·R, t = tp + Rp·t.
+            let sum = t.translation.as_i64vec3() + t.rotation.apply(*translation).as_i64vec3();
+            if sum.abs().max_element() > MAX_TRANSLATION {
                 return Err(malformed(
                     path,
                     *at,
-                    format!("translations overflow i32 at node {id}"),
+                    format!("translation {sum} at node {id} is beyond ±2³⁰ voxels"),
                 ));
             }
-            let sum = sum.as_ivec3();
-            walk(nodes, *child, sum, depth + 1, model_count, out, path)
+            let placed = Placement {
+                rotation: t.rotation.then_inner(*rotation),
+                translation: sum.as_ivec3(),
+            };
+            walk(nodes, *child, placed, depth + 1, model_count, out, path)
         }
         Node::Group { children } => {
             for &c in children {
@@ -317,7 +394,11 @@ fn walk(
                 if out.len() >= MAX_INSTANCES {
                     return Err(malformed(path, *at, format!("more than {MAX_INSTANCES} shapes")));
                 }
-                out.push(VoxInstance { model: m as u32, translation: t });
+                out.push(VoxInstance {
+                    model: m as u32,
+                    rotation: t.rotation,
+                    translation: t.translation,
+                });
             }
             Ok(())
         }

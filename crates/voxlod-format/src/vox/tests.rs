@@ -90,7 +90,11 @@ fn header_chunks_and_scene_graph_follow_the_documented_layout() {
     assert_eq!(&b[rgba - 12..rgba - 8], b"RGBA");
     assert_eq!(b[rgba..rgba + 8], [9, 8, 7, 255, 0, 0, 0, 0]);
     let file = decode(b, mem()).unwrap();
-    assert_eq!(file.instances, [VoxInstance { model: 0, translation: IVec3::ONE }]);
+    let identity = VoxRotation::IDENTITY;
+    assert_eq!(
+        file.instances,
+        [VoxInstance { model: 0, rotation: identity, translation: IVec3::ONE }]
+    );
     assert_eq!(file.world_voxels().collect::<Vec<_>>(), [(IVec3::new(1, -2, 1), 1)]);
     same_occupancy(&map, &file);
 }
@@ -200,21 +204,227 @@ fn refuses_empty_grids_and_reads_strictly() {
     assert!(patched(32, &300i32.to_le_bytes()).is_err()); // model size x over 256
     assert!(patched(63, &[0]).is_err()); // colour index 0 of the first voxel
     assert!(patched(60, &[200]).is_err()); // voxel outside its model
-    // A rotated transform is refused as unsupported, not read wrong.
+    // A rotation byte in the frame dictionary: a signed permutation reads, anything else is
+    // malformed (named, not guessed).
     let text = b"\x02\0\0\0_t";
     let at = bytes.windows(text.len()).position(|w| w == text).unwrap();
-    let mut rotated = bytes[..at].to_vec();
-    // Rebuild the frame dictionary with a rotation: splice in "_r" → "17" before "_t".
-    rotated.extend_from_slice(b"\x02\0\0\0_r\x02\0\0\0\x317");
-    rotated.extend_from_slice(&bytes[at..]);
-    // Fix the counts: the pair count (just before the key) and the chunk and MAIN lengths.
-    let count_at = at - 4;
-    rotated[count_at..count_at + 4].copy_from_slice(&2i32.to_le_bytes());
-    let trn = rotated[..at].windows(4).rposition(|w| w == b"nTRN").unwrap();
-    let n = i32::from_le_bytes(rotated[trn + 4..trn + 8].try_into().unwrap()) + 12;
-    rotated[trn + 4..trn + 8].copy_from_slice(&n.to_le_bytes());
-    let m = i32::from_le_bytes(rotated[16..20].try_into().unwrap()) + 12;
-    rotated[16..20].copy_from_slice(&m.to_le_bytes());
-    let e = decode(&rotated, mem()).unwrap_err();
-    assert!(matches!(e, Error::Unsupported { format: "vox", .. }), "{e}");
+    let with_rotation = |r: &str| {
+        let mut rotated = bytes[..at].to_vec();
+        // Splice in "_r" → r before "_t".
+        rotated.extend_from_slice(b"\x02\0\0\0_r");
+        rotated.extend_from_slice(&(r.len() as i32).to_le_bytes());
+        rotated.extend_from_slice(r.as_bytes());
+        rotated.extend_from_slice(&bytes[at..]);
+        let grown = 10 + r.len() as i32;
+        // Fix the counts: the pair count (just before the key) and the chunk and MAIN lengths.
+        let count_at = at - 4;
+        rotated[count_at..count_at + 4].copy_from_slice(&2i32.to_le_bytes());
+        let trn = rotated[..at].windows(4).rposition(|w| w == b"nTRN").unwrap();
+        let n = i32::from_le_bytes(rotated[trn + 4..trn + 8].try_into().unwrap()) + grown;
+        rotated[trn + 4..trn + 8].copy_from_slice(&n.to_le_bytes());
+        let m = i32::from_le_bytes(rotated[16..20].try_into().unwrap()) + grown;
+        rotated[16..20].copy_from_slice(&m.to_le_bytes());
+        decode(&rotated, mem())
+    };
+    let file = with_rotation("17").unwrap();
+    assert_eq!(file.instances[0].rotation.rows(), [[0, -1, 0], [1, 0, 0], [0, 0, 1]]);
+    assert_eq!(with_rotation("4").unwrap().instances, decode(&bytes, mem()).unwrap().instances);
+    for bad in ["0", "3", "7", "15", "128", "-1", "x"] {
+        let e = with_rotation(bad).unwrap_err();
+        assert!(matches!(e, Error::Malformed { format: "vox", .. }), "{bad}: {e}");
+        assert!(e.to_string().contains("rotation"), "{bad}: {e}");
+    }
+}
+
+/// A `.vox` file built by hand: models `(size, voxels)`, scene-graph chunks, an optional
+/// palette.
+fn hand_built(models: &[(UVec3, Vec<[u8; 4]>)], graph: &[u8], rgba: Option<&[u8]>) -> Vec<u8> {
+    let mut body = Vec::new();
+    for (size, voxels) in models {
+        let s: Vec<u8> = size.to_array().iter().flat_map(|v| (*v as i32).to_le_bytes()).collect();
+        chunk(&mut body, b"SIZE", &s);
+        let mut c = (voxels.len() as i32).to_le_bytes().to_vec();
+        voxels.iter().for_each(|v| c.extend_from_slice(v));
+        chunk(&mut body, b"XYZI", &c);
+    }
+    body.extend_from_slice(graph);
+    if let Some(rgba) = rgba {
+        chunk(&mut body, b"RGBA", rgba);
+    }
+    let mut b = b"VOX ".to_vec();
+    b.extend_from_slice(&200i32.to_le_bytes());
+    b.extend_from_slice(b"MAIN");
+    b.extend_from_slice(&0i32.to_le_bytes());
+    b.extend_from_slice(&(body.len() as i32).to_le_bytes());
+    b.extend_from_slice(&body);
+    b
+}
+
+/// A transform node with a rotation byte and a translation in its frame.
+fn rotated_node(id: i32, child: i32, r: Option<u8>, t: IVec3) -> Vec<u8> {
+    let mut c = id.to_le_bytes().to_vec();
+    dict(&mut c, &[]);
+    for x in [child, -1, 0, 1] {
+        c.extend_from_slice(&x.to_le_bytes());
+    }
+    let t = format!("{} {} {}", t.x, t.y, t.z);
+    match r {
+        Some(r) => dict(&mut c, &[("_r", &r.to_string()), ("_t", &t)]),
+        None => dict(&mut c, &[("_t", &t)]),
+    }
+    let mut out = Vec::new();
+    chunk(&mut out, b"nTRN", &c);
+    out
+}
+
+fn graph_chunk(id: &[u8; 4], content: Vec<u8>) -> Vec<u8> {
+    let mut out = Vec::new();
+    chunk(&mut out, id, &content);
+    out
+}
+
+/// Every voxel of a 1×2×3 model, coloured 1 + x + y + 2z so each is recognisable.
+fn block_1x2x3() -> (UVec3, Vec<[u8; 4]>) {
+    let mut voxels = Vec::new();
+    for z in 0..3u8 {
+        for y in 0..2u8 {
+            voxels.push([0, y, z, 1 + y + 2 * z]);
+        }
+    }
+    (UVec3::new(1, 2, 3), voxels)
+}
+
+/// World voxels sorted by colour.
+fn by_colour(file: &VoxFile) -> Vec<(u8, IVec3)> {
+    let mut v: Vec<(u8, IVec3)> = file.world_voxels().map(|(p, c)| (c, p)).collect();
+    v.sort_unstable_by_key(|(c, _)| *c);
+    v
+}
+
+#[test]
+fn rotation_bytes_are_the_48_signed_permutations() {
+    let valid: Vec<VoxRotation> = (0..=255u8).filter_map(VoxRotation::from_byte).collect();
+    assert_eq!(valid.len(), 48);
+    for r in &valid {
+        assert_eq!(VoxRotation::from_byte(r.to_byte()), Some(*r));
+        assert_eq!(r.determinant().abs(), 1);
+        // Composition is the matrix product.
+        for s in &valid {
+            let (a, b, ab) = (r.rows(), s.rows(), r.then_inner(*s).rows());
+            for i in 0..3 {
+                for j in 0..3 {
+                    let dot: i32 = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+                    assert_eq!(ab[i][j], dot, "{r:?} · {s:?}");
+                }
+            }
+        }
+    }
+    assert_eq!(valid.iter().filter(|r| r.determinant() == 1).count(), 24);
+    assert_eq!(VoxRotation::from_byte(IDENTITY_ROTATION), Some(VoxRotation::IDENTITY));
+}
+
+#[test]
+fn a_rotated_1x2x3_model_lands_where_computed_by_hand() {
+    // The specification's example rotation: rows (0 1 0), (0 0 −1), (−1 0 0), byte
+    // 1 | 2<<2 | 1<<5 | 1<<6 = 105, translated by (10, 20, 30).
+    // Voxel (0, y, z) has its centre at (0.5, y + 0.5, z + 0.5) − pivot ⌊(1, 2, 3)/2⌋ = (0, 1, 1),
+    // i.e. (0.5, y − 0.5, z − 0.5); R maps it to (y − 0.5, 0.5 − z, −0.5); plus (10, 20, 30):
+    // (9.5 + y, 20.5 − z, 29.5), the cell with minimum corner (9 + y, 20 − z, 29).
+    let graph = [
+        rotated_node(0, 1, Some(105), IVec3::new(10, 20, 30)),
+        graph_chunk(b"nSHP", shape_node(1, 0)),
+    ]
+    .concat();
+    let bytes = hand_built(&[block_1x2x3()], &graph, None);
+    let file = decode(&bytes, mem()).unwrap();
+    let expected = [
+        (1, IVec3::new(9, 20, 29)),  // (0, 0, 0)
+        (2, IVec3::new(10, 20, 29)), // (0, 1, 0)
+        (3, IVec3::new(9, 19, 29)),  // (0, 0, 1)
+        (4, IVec3::new(10, 19, 29)), // (0, 1, 1)
+        (5, IVec3::new(9, 18, 29)),  // (0, 0, 2)
+        (6, IVec3::new(10, 18, 29)), // (0, 1, 2)
+    ];
+    assert_eq!(by_colour(&file), expected);
+
+    // The same under a parent turning a quarter about z (x' = −y, y' = x; byte 1 | 1<<4 = 17)
+    // and moving by (100, 0, 0): the centre (9.5 + y, 20.5 − z, 29.5) goes to
+    // (100 − 20.5 + z, 9.5 + y, 29.5), the cell (79 + z, 9 + y, 29).
+    let graph = [
+        rotated_node(0, 1, Some(17), IVec3::new(100, 0, 0)),
+        graph_chunk(b"nGRP", group_node(1, &[2])),
+        rotated_node(2, 3, Some(105), IVec3::new(10, 20, 30)),
+        graph_chunk(b"nSHP", shape_node(3, 0)),
+    ]
+    .concat();
+    let file = decode(&hand_built(&[block_1x2x3()], &graph, None), mem()).unwrap();
+    let expected = [
+        (1, IVec3::new(79, 9, 29)),
+        (2, IVec3::new(79, 10, 29)),
+        (3, IVec3::new(80, 9, 29)),
+        (4, IVec3::new(80, 10, 29)),
+        (5, IVec3::new(81, 9, 29)),
+        (6, IVec3::new(81, 10, 29)),
+    ];
+    assert_eq!(by_colour(&file), expected);
+    assert_eq!(file.instances[0].translation, IVec3::new(80, 10, 30));
+
+    // Without a rotation the model's minimum corner is t − ⌊size/2⌋ (the unrotated rule):
+    // voxel (0, 1, 2) at (10, 20, 30) − (0, 1, 1) + (0, 1, 2).
+    let graph =
+        [rotated_node(0, 1, None, IVec3::new(10, 20, 30)), graph_chunk(b"nSHP", shape_node(1, 0))]
+            .concat();
+    let file = decode(&hand_built(&[block_1x2x3()], &graph, None), mem()).unwrap();
+    assert_eq!(by_colour(&file)[5], (6, IVec3::new(10, 20, 31)));
+
+    // A half turn about z (rows (−1 0 0), (0 −1 0), (0 0 1): byte 4 | 1<<4 | 1<<5 = 52): along
+    // the odd axis y of a 3×3×1 model the middle voxel moves by one (the pivot is a corner).
+    let (size, voxel) = (UVec3::new(3, 3, 1), [1u8, 1, 0, 9]);
+    let graph = [rotated_node(0, 1, Some(52), IVec3::ZERO), graph_chunk(b"nSHP", shape_node(1, 0))]
+        .concat();
+    let file = decode(&hand_built(&[(size, vec![voxel])], &graph, None), mem()).unwrap();
+    assert_eq!(by_colour(&file), [(9, IVec3::new(-1, -1, 0))]);
+    // And a reflection (x mirrored: byte 4 | 1<<4 = 20) reads too.
+    let graph = [rotated_node(0, 1, Some(20), IVec3::ZERO), graph_chunk(b"nSHP", shape_node(1, 0))]
+        .concat();
+    let file = decode(&hand_built(&[block_1x2x3()], &graph, None), mem()).unwrap();
+    assert_eq!(file.instances[0].rotation.determinant(), -1);
+    assert_eq!(by_colour(&file)[0], (1, IVec3::new(-1, -1, -1)));
+    // to_brick_map gives voxlod axes: (x, y, z) → (x, z, −1 − y); the mirrored voxels span
+    // x = −1, y ∈ {−1, 0}, z ∈ {−1, 0, 1}.
+    let (min, map) =
+        decode(&hand_built(&[block_1x2x3()], &graph, None), mem()).unwrap().to_brick_map().unwrap();
+    assert_eq!((min, map.dims(), map.len()), (IVec3::new(-1, -1, -1), UVec3::new(1, 3, 2), 6));
+}
+
+#[test]
+fn a_file_without_rgba_gets_magicavoxels_default_palette() {
+    let graph =
+        [rotated_node(0, 1, None, IVec3::ZERO), graph_chunk(b"nSHP", shape_node(1, 0))].concat();
+    let file = decode(&hand_built(&[block_1x2x3()], &graph, None), mem()).unwrap();
+    // Entries as the specification lists them (u32 0xAABBGGRR, little-endian RGBA bytes).
+    let spec: [(usize, u32); 10] = [
+        (0, 0x0000_0000),
+        (1, 0xffff_ffff),
+        (2, 0xffcc_ffff),
+        (7, 0xffff_ccff),
+        (37, 0xffff_ffcc),
+        (215, 0xff33_0000),
+        (216, 0xff00_00ee),
+        (226, 0xff00_ee00),
+        (236, 0xffee_0000),
+        (255, 0xff11_1111),
+    ];
+    for (i, v) in spec {
+        assert_eq!(file.palette[i], v.to_le_bytes(), "entry {i}");
+    }
+    // Every entry 1–255 is distinct and opaque.
+    let distinct: std::collections::HashSet<[u8; 4]> = file.palette[1..].iter().copied().collect();
+    assert_eq!(distinct.len(), 255);
+    assert!(file.palette[1..].iter().all(|c| c[3] == 255));
+    // A file with its own palette keeps it.
+    let mut rgba = vec![7u8; 1024];
+    rgba[0..4].copy_from_slice(&[1, 2, 3, 4]);
+    let file = decode(&hand_built(&[block_1x2x3()], &graph, Some(&rgba)), mem()).unwrap();
+    assert_eq!((file.palette[0], file.palette[1], file.palette[2]), ([0; 4], [1, 2, 3, 4], [7; 4]));
 }
