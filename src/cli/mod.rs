@@ -381,6 +381,20 @@ pub enum ToggleArg {
     SunOnly,
     /// voxlod's line-sampled directional opacity.
     LinesOpacity,
+    /// The paper text's normalized circles.
+    CirclesOpacity,
+    /// voxlod's 16 fixed samples per visible face.
+    FixedFaceSamples,
+    /// voxlod's stored-normals shading fallback.
+    StoredNormalsFallback,
+    /// voxlod's exact per-ray [VJK21] chord.
+    PerRayChord,
+    /// voxlod's Averages normal flipped toward the viewer.
+    FlippedAveragesNormal,
+    /// voxlod's fixed pixel pattern.
+    FixedPixelPattern,
+    /// All of voxlod's choices at once.
+    AllOurs,
     /// Scores on images cropped to the ground truth's coverage.
     Crop,
 }

@@ -36,6 +36,13 @@ pub fn ablation(ui: &Ui, args: AblationArgs) -> Result<()> {
                 ToggleArg::SceneBackground => Toggle::SceneBackground,
                 ToggleArg::SunOnly => Toggle::SunOnly,
                 ToggleArg::LinesOpacity => Toggle::LinesOpacityRule,
+                ToggleArg::CirclesOpacity => Toggle::CirclesOpacityRule,
+                ToggleArg::FixedFaceSamples => Toggle::FixedFaceSamples,
+                ToggleArg::StoredNormalsFallback => Toggle::StoredNormalsFallback,
+                ToggleArg::PerRayChord => Toggle::PerRayChord,
+                ToggleArg::FlippedAveragesNormal => Toggle::FlippedAveragesNormal,
+                ToggleArg::FixedPixelPattern => Toggle::FixedPixelPattern,
+                ToggleArg::AllOurs => Toggle::AllOurs,
                 ToggleArg::Crop => Toggle::Crop,
             })
             .collect()

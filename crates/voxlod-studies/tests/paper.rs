@@ -14,10 +14,17 @@ fn the_ablation_pairs_each_variant_with_the_setup() {
     let dir = std::env::temp_dir().join(format!("voxlod-paper-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let config = config(Some(dir.clone()));
-    let toggles = [Toggle::LinesOpacityRule, Toggle::Crop, Toggle::SunOnly, Toggle::CoarseMesh];
+    let toggles = [
+        Toggle::LinesOpacityRule,
+        Toggle::Crop,
+        Toggle::SunOnly,
+        Toggle::CoarseMesh,
+        Toggle::FlippedAveragesNormal,
+        Toggle::PerRayChord,
+    ];
     let result = ablation::run(&config, &toggles, &|_| {}).unwrap();
     let cases = &result.result.cases;
-    assert_eq!(cases.len(), 5);
+    assert_eq!(cases.len(), 7);
     assert_eq!(cases[0].variant, Variant::paper());
     let methods: Vec<&str> = cases[0].methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods, ["Averages", "[VJK21]", "virtual mesh", "Adaptive τ=0.1"]);
@@ -43,6 +50,17 @@ fn the_ablation_pairs_each_variant_with_the_setup() {
         lines.method("virtual mesh").unwrap().mse,
         setup.method("virtual mesh").unwrap().mse
     );
+    // Each of the authors' choices moves only the method it belongs to.
+    let moved = |toggle: Toggle, method: &str| {
+        let case = find(toggle.name());
+        for m in ["Averages", "[VJK21]", "virtual mesh"] {
+            let same = case.method(m).unwrap().mse == setup.method(m).unwrap().mse;
+            assert_eq!(same, m != method, "{}: {m}", toggle.name());
+        }
+    };
+    moved(Toggle::FlippedAveragesNormal, "Averages");
+    moved(Toggle::PerRayChord, "[VJK21]");
+    moved(Toggle::LinesOpacityRule, "virtual mesh");
     // Cropping to the coverage removes background pixels every method gets nearly right: the
     // MSE over what remains is higher.
     let crop = find(Toggle::Crop.name());

@@ -1,6 +1,7 @@
 //! The ablation of the paper setup: one deviation at a time, every method's change from the
 //! setup on the same views and seeds, and whether the paper's ranking holds under it.
 
+use voxlod_cpu::appearance::AuthorsChoices;
 use voxlod_cpu::appearance::subgrid::DirectionalRule;
 use voxlod_eval::report::{Cell, Column, Table};
 
@@ -19,8 +20,23 @@ pub enum Toggle {
     SceneBackground,
     /// The scene's sun alone, at full strength.
     SunOnly,
-    /// voxlod's line-sampled directional opacity instead of the paper's normalized circles.
+    /// voxlod's line-sampled directional opacity instead of the authors' rule.
     LinesOpacityRule,
+    /// The paper text's normalized circles (§3.4) instead of the authors' code's rule.
+    CirclesOpacityRule,
+    /// voxlod's 16 fixed samples per visible face instead of up to 40 random ones.
+    FixedFaceSamples,
+    /// voxlod's fallback (shade with every stored normal) instead of leaving the voxel
+    /// unshaded when no sample faces the viewer.
+    StoredNormalsFallback,
+    /// voxlod's exact per-ray \[VJK21\] chord instead of the cached per-voxel one.
+    PerRayChord,
+    /// voxlod's Averages normal flipped toward the viewer instead of used as stored.
+    FlippedAveragesNormal,
+    /// voxlod's fixed 4-ray pixel pattern instead of a jittered one.
+    FixedPixelPattern,
+    /// Every one of voxlod's choices at once (the rows above from the representations down).
+    AllOurs,
     /// Scores on images cropped to the ground truth's coverage.
     Crop,
 }
@@ -33,6 +49,13 @@ impl Toggle {
         Toggle::SceneBackground,
         Toggle::SunOnly,
         Toggle::LinesOpacityRule,
+        Toggle::CirclesOpacityRule,
+        Toggle::FixedFaceSamples,
+        Toggle::StoredNormalsFallback,
+        Toggle::PerRayChord,
+        Toggle::FlippedAveragesNormal,
+        Toggle::FixedPixelPattern,
+        Toggle::AllOurs,
         Toggle::Crop,
     ];
 
@@ -44,6 +67,13 @@ impl Toggle {
             Self::SceneBackground => "scene's background",
             Self::SunOnly => "sun only",
             Self::LinesOpacityRule => "line-sampled opacity (voxlod's)",
+            Self::CirclesOpacityRule => "normalized circles (paper's text)",
+            Self::FixedFaceSamples => "16 fixed face samples (voxlod's)",
+            Self::StoredNormalsFallback => "stored-normals fallback (voxlod's)",
+            Self::PerRayChord => "per-ray [VJK21] chord (voxlod's)",
+            Self::FlippedAveragesNormal => "Averages normal flipped (voxlod's)",
+            Self::FixedPixelPattern => "fixed pixel pattern (voxlod's)",
+            Self::AllOurs => "all of voxlod's choices",
             Self::Crop => "cropped scores",
         }
     }
@@ -51,12 +81,21 @@ impl Toggle {
     /// The paper setup with this one deviation.
     pub fn variant(self) -> Variant {
         let mut v = Variant { name: self.name().into(), ..Variant::paper() };
+        let ours = AuthorsChoices::default();
+        let c = &mut v.choices;
         match self {
             Self::CoarseMesh => v.coarse = true,
             Self::RedBackground => v.background = Background::Red,
             Self::SceneBackground => v.background = Background::Scene,
             Self::SunOnly => v.lighting = Lighting::Sun,
-            Self::LinesOpacityRule => v.rule = DirectionalRule::Lines,
+            Self::LinesOpacityRule => c.opacity_rule = DirectionalRule::Lines,
+            Self::CirclesOpacityRule => c.opacity_rule = DirectionalRule::Circles,
+            Self::FixedFaceSamples => c.face_samples = ours.face_samples,
+            Self::StoredNormalsFallback => c.fallback = ours.fallback,
+            Self::PerRayChord => c.vjk_chord = ours.vjk_chord,
+            Self::FlippedAveragesNormal => c.averages_normal = ours.averages_normal,
+            Self::FixedPixelPattern => c.pattern = ours.pattern,
+            Self::AllOurs => *c = ours,
             Self::Crop => v.crop = true,
         }
         v

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
+use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
 use voxlod_cpu::appearance::{Appearance, sggx, virtual_mesh};
 use voxlod_cpu::voxelize::{self, Mode, Voxelization};
 use voxlod_eval::report::{Cell, Column, NumberFormat, Report, Table};
@@ -231,10 +231,14 @@ fn downsample(
         .collect();
     for seed in 0..config.seeds {
         let opts = PrecomputeOptions { rays: config.rays, seed };
+        let choices = Variant::paper().choices_for_seed(seed);
         progress(&format!("downsample experiment, seed {seed}: precompute"));
         let c_ctx = SamplingContext::new(&loaded.scene, &loaded.geometry, &coarse)?;
         let vjk = precompute(&c_ctx, &opts, sggx::fit)?;
-        let vm = VirtualMeshGrid::new(precompute(&c_ctx, &opts, virtual_mesh::fit)?);
+        let vm = VirtualMeshGrid::with_params(
+            precompute(&c_ctx, &opts, virtual_mesh::fit)?,
+            choices.virtual_mesh(VirtualMeshParams::default()),
+        );
         drop(c_ctx);
         let f_ctx = SamplingContext::new(&loaded.scene, &loaded.geometry, &fine)?;
         let vjk_fine = precompute(&f_ctx, &opts, sggx::fit)?;
@@ -244,7 +248,8 @@ fn downsample(
             progress(&format!("downsample experiment, seed {seed}: {}", row.what));
             for (camera, reference) in loaded.views.iter().zip(&setup.references) {
                 let bg = setup.scene.background;
-                let image = render_linear(grid, camera, &setup.lights, bg, config.ambient, size)?;
+                let (lights, ambient) = (&setup.lights, config.ambient);
+                let image = render_linear(grid, camera, lights, bg, ambient, &choices, size)?;
                 let image = if size == res { image } else { downsample_2x2(&image) };
                 let m = voxlod_eval::compare(&image.to_srgb8(), reference)?;
                 row.mse.push(m.mse);

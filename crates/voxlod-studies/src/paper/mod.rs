@@ -39,11 +39,14 @@ use std::time::Instant;
 
 use glam::Vec3;
 use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::averages::AveragesGrid;
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
-use voxlod_cpu::appearance::subgrid::DirectionalRule;
-use voxlod_cpu::appearance::virtual_mesh::VirtualMeshGrid;
-use voxlod_cpu::appearance::{Appearance, averages, sggx, virtual_mesh};
+use voxlod_cpu::appearance::virtual_mesh::{VirtualMeshGrid, VirtualMeshParams};
+use voxlod_cpu::appearance::{
+    Appearance, AuthorsChoices, FaceSamples, averages, sggx, virtual_mesh,
+};
+use voxlod_cpu::render::filtered::PixelPattern;
 use voxlod_cpu::voxelize::{self, Mode};
 use voxlod_eval::report::LabeledImage;
 use voxlod_format::GridSpec;
@@ -72,41 +75,35 @@ pub struct PaperScene {
     pub paper: Option<String>,
 }
 
-/// The embedded bunny subdivided to the paper's order of triangles (Loop, 3 674·4³ = 235 136
-/// triangles; the paper's has 144 k), with the original as the coarse variant.
+/// The embedded bunny split to the paper's order of triangles (midpoint subdivision, 3 674·4³ =
+/// 235 136 triangles on the same surface; the paper's has 144 k), with the original as the
+/// coarse variant: between the two only the triangles' size against a voxel changes.
 pub fn dense_bunny() -> PaperScene {
     PaperScene {
         label: "bunny".into(),
-        spec: "builtin:bunny?subdivide=3&subdivision=loop".into(),
+        spec: "builtin:bunny?subdivide=3".into(),
         coarse: Some("builtin:bunny".into()),
         paper: Some("Bunny".into()),
     }
 }
 
-/// The scenes of the paper setup, standing for the paper's Bunny, Trees, Island and City (its
-/// Bistro is not built: a textured interior of 3.4 M triangles we cannot ship).
+/// The scenes of the paper setup ([`crate::scenes::PAPER_SCENES`]), standing for the paper's
+/// Bunny, Trees, Island and City (its Bistro, a downloaded 3.4 M-triangle model, is not built).
+/// Only the bunny has a coarse variant: the others' detail is their content.
 pub fn paper_scenes() -> Vec<PaperScene> {
-    let scene = |label: &str, paper: &str, spec: &str, coarse: &str| PaperScene {
-        label: label.into(),
-        spec: spec.into(),
-        coarse: Some(coarse.into()),
-        paper: Some(paper.into()),
-    };
-    vec![
-        dense_bunny(),
-        scene(
-            "trees",
-            "Trees",
-            "builtin:forest?trees=12&leaves=40000",
-            "builtin:forest?trees=12&leaves=4000&cluster=4",
-        ),
-        scene(
-            "island",
-            "Island",
-            "builtin:island?grass=100000",
-            "builtin:island?grass=10000&terrain=64",
-        ),
-    ]
+    crate::scenes::PAPER_SCENES
+        .iter()
+        .map(|&(paper, spec)| {
+            if paper == "Bunny" {
+                return dense_bunny();
+            }
+            let label = match paper {
+                "Trees" => "trees".to_string(),
+                other => other.to_ascii_lowercase(),
+            };
+            PaperScene { label, spec: spec.into(), coarse: None, paper: Some(paper.into()) }
+        })
+        .collect()
 }
 
 /// The scenes a command names: `paper` (all of [`paper_scenes`]), one of their labels, or any
@@ -134,25 +131,46 @@ pub struct Variant {
     pub background: Background,
     /// Lights.
     pub lighting: Lighting,
-    /// How the virtual mesh's opacity subgrid is read along a direction.
+    /// Where the representations follow the authors' code or ours (opacity rule, face
+    /// samples, fallback, \[VJK21\] chord, Averages normal, pixel pattern). Seeds inside it are
+    /// replaced per sample seed: the precompute's lines, a random face sampling and a jittered
+    /// pixel pattern all take the sample's seed.
     #[serde(serialize_with = "ser_debug")]
-    pub rule: DirectionalRule,
+    pub choices: AuthorsChoices,
     /// Whether scores are computed on the images cropped to the ground truth's coverage
     /// (bounding box of pixels with any coverage, one pixel of margin, at least the SSIM window).
     pub crop: bool,
 }
 
 impl Variant {
-    /// The paper's conditions.
+    /// The paper's conditions: the authors' choices everywhere their code differs from ours
+    /// ([`AuthorsChoices::authors`]) and a jittered pixel pattern (§4: "four rays per pixel,
+    /// from a set of precomputed jittered patterns").
     pub fn paper() -> Self {
         Self {
             name: "paper setup".into(),
             coarse: false,
             background: Background::White,
             lighting: Lighting::SunAndPoint,
-            rule: DirectionalRule::Circles,
+            choices: AuthorsChoices {
+                pattern: PixelPattern::Jittered { seed: 0 },
+                ..AuthorsChoices::authors()
+            },
             crop: false,
         }
+    }
+
+    /// The choices for sample seed `seed`: every random source of the representations takes it.
+    pub fn choices_for_seed(&self, seed: u32) -> AuthorsChoices {
+        let mut c = self.choices;
+        c.precompute_seed = seed;
+        if let FaceSamples::Random { .. } = c.face_samples {
+            c.face_samples = FaceSamples::Random { seed };
+        }
+        if let PixelPattern::Jittered { .. } = c.pattern {
+            c.pattern = PixelPattern::Jittered { seed };
+        }
+        c
     }
 }
 
@@ -395,10 +413,31 @@ struct Built {
     precompute_ms: f64,
 }
 
-/// The virtual mesh is kept by type: each variant reads its subgrid with its own rule.
+/// Averages and the virtual mesh are kept by type: each variant reads them with its own
+/// choices (normal; rule, face samples, fallback).
 enum Repr {
     Any(Box<dyn Appearance>),
+    Averages(AveragesGrid),
     VirtualMesh(VirtualMeshGrid),
+}
+
+impl Repr {
+    /// The representation read with `choices`.
+    fn with(&mut self, choices: &AuthorsChoices) -> &dyn Appearance {
+        match self {
+            Repr::Any(g) => &**g,
+            Repr::Averages(g) => {
+                g.normal = choices.averages_normal;
+                g
+            }
+            Repr::VirtualMesh(g) => {
+                let p = choices.virtual_mesh(VirtualMeshParams::default());
+                (g.rule, g.samples_per_face, g.sampling, g.fallback) =
+                    (p.rule, p.samples_per_face, p.sampling, p.fallback);
+                g
+            }
+        }
+    }
 }
 
 /// Precomputes every method from the sampling lines of `seed` (each timed with its own share:
@@ -419,7 +458,7 @@ fn build(
         method: "Averages".into(),
         bytes_per_voxel: per_voxel(g.memory_bytes(), g.records.len()),
         precompute_ms: ms(t.elapsed()),
-        repr: Repr::Any(Box::new(g)),
+        repr: Repr::Averages(AveragesGrid { grid: g, normal: Default::default() }),
     });
     progress("[VJK21]");
     let t = Instant::now();
@@ -442,13 +481,14 @@ fn build(
     if !config.thresholds.is_empty() {
         progress("Adaptive");
         let t = Instant::now();
+        // Adaptive's candidates are built once per seed for every variant: its virtual mesh is
+        // read with the paper setup's choices.
+        let choices = Variant::paper().choices_for_seed(seed);
         let options = AdaptiveOptions {
             rays: config.rays,
             seed,
-            vmesh: virtual_mesh::VirtualMeshParams {
-                rule: Variant::paper().rule,
-                ..Default::default()
-            },
+            ambient: config.ambient,
+            vmesh: choices.virtual_mesh(VirtualMeshParams::default()),
             ..Default::default()
         };
         let candidates = adaptive::Candidates::build(ctx, &options)?;
@@ -508,21 +548,17 @@ fn run_group(
         for (g, (v, setup)) in group.iter().zip(&setups).enumerate() {
             for b in &mut built {
                 progress(&format!("{label} {res}² seed {seed} {}: rendering {}", v.name, b.method));
-                let grid: &dyn Appearance = match &mut b.repr {
-                    Repr::VirtualMesh(m) => {
-                        m.rule = v.rule;
-                        m
-                    }
-                    Repr::Any(g) => &**g,
-                };
+                let choices = v.choices_for_seed(seed);
+                let grid = b.repr.with(&choices);
                 let (mut mse, mut ssim, mut render_ms) = (Vec::new(), Vec::new(), 0.0);
                 for ((camera, reference), crop) in
                     views.iter().zip(&setup.references).zip(&setup.crops)
                 {
                     let t = Instant::now();
                     let background = setup.scene.background;
+                    let ambient = config.ambient;
                     let image =
-                        render(grid, camera, &setup.lights, background, config.ambient, res)?;
+                        render(grid, camera, &setup.lights, background, ambient, &choices, res)?;
                     render_ms += ms(t.elapsed());
                     let m = voxlod_eval::compare(&crop.apply(&image), &crop.apply(reference))?;
                     if seed == 0 && mse.is_empty() {

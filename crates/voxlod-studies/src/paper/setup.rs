@@ -2,7 +2,7 @@
 //! variant its lights, background, ground truths (through the cache) and crop boxes.
 
 use glam::Vec3;
-use voxlod_cpu::appearance::Appearance;
+use voxlod_cpu::appearance::{Appearance, AuthorsChoices};
 use voxlod_cpu::raycast::Bvh;
 use voxlod_cpu::render::{filtered, ground_truth};
 use voxlod_scene::{Camera, Geometry, Image, Light, Scene, Srgb8Image};
@@ -118,17 +118,18 @@ pub(super) fn render_linear(
     lights: &[Light],
     background: Vec3,
     ambient: Vec3,
+    choices: &AuthorsChoices,
     size: u32,
 ) -> Result<Image, Error> {
     let mut cache = filtered::FrameCache::new(grid)?;
     lighting::superpose(lights, ambient, background, |l, a, b| {
-        let options = filtered::Options {
+        let options = choices.render(filtered::Options {
             width: size,
             height: size,
             ambient: a,
             shadows: true,
             ..Default::default()
-        };
+        });
         Ok(filtered::render(&mut cache, camera, l, b, &options)?)
     })
 }
@@ -140,9 +141,10 @@ pub(super) fn render(
     lights: &[voxlod_scene::Light],
     background: Vec3,
     ambient: Vec3,
+    choices: &AuthorsChoices,
     size: u32,
 ) -> Result<Srgb8Image, Error> {
-    Ok(render_linear(grid, camera, lights, background, ambient, size)?.to_srgb8())
+    Ok(render_linear(grid, camera, lights, background, ambient, choices, size)?.to_srgb8())
 }
 
 /// The part of an image that is scored.
