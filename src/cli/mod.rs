@@ -282,6 +282,10 @@ pub struct CompareSceneArgs {
     #[arg(long, default_value = "0.1,0.2,0.3", value_delimiter = ',',
           value_parser = parse::non_negative_f32)]
     pub thresholds: Vec<f32>,
+    /// With `--setup paper`: Adaptive thresholds of the image-error selector, comma-separated.
+    #[arg(long, default_value = "0.01,0.02", value_delimiter = ',',
+          value_parser = parse::non_negative_f32)]
+    pub image_thresholds: Vec<f32>,
     #[command(flatten)]
     pub paper: PaperArgs,
     /// With `--setup paper`: also the rays-per-voxel sweep (`--sweep-rays`), the 2×2-downsample
@@ -358,6 +362,10 @@ pub struct AblationArgs {
     #[arg(long, default_value = "0.1", value_delimiter = ',',
           value_parser = parse::non_negative_f32)]
     pub thresholds: Vec<f32>,
+    /// Adaptive thresholds of the image-error selector (finite, ≥ 0), comma-separated.
+    #[arg(long, default_value = "0.01,0.02", value_delimiter = ',',
+          value_parser = parse::non_negative_f32)]
+    pub image_thresholds: Vec<f32>,
     #[command(flatten)]
     pub paper: PaperArgs,
     /// Output directory.

@@ -55,6 +55,7 @@ pub fn ablation(ui: &Ui, args: AblationArgs) -> Result<()> {
         seeds: args.paper.seeds,
         rays: args.rays,
         thresholds: args.thresholds.clone(),
+        image_thresholds: args.image_thresholds.clone(),
         cache: cache_dir(&args.paper),
         command: super::invocation(),
         ..PaperConfig::full()

@@ -88,6 +88,7 @@ fn compare_paper(ui: &Ui, args: CompareSceneArgs) -> Result<()> {
         seeds: args.paper.seeds,
         rays: args.rays,
         thresholds: args.thresholds.clone(),
+        image_thresholds: args.image_thresholds.clone(),
         cache: super::ablation::cache_dir(&args.paper),
         command: super::invocation(),
         ..PaperConfig::full()

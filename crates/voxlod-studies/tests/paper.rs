@@ -27,7 +27,17 @@ fn the_ablation_pairs_each_variant_with_the_setup() {
     assert_eq!(cases.len(), 7);
     assert_eq!(cases[0].variant, Variant::paper());
     let methods: Vec<&str> = cases[0].methods.iter().map(|m| m.method.as_str()).collect();
-    assert_eq!(methods, ["Averages", "[VJK21]", "virtual mesh", "Adaptive τ=0.1"]);
+    assert_eq!(
+        methods,
+        [
+            "Averages",
+            "[VJK21]",
+            "virtual mesh",
+            "Adaptive τ=0.1",
+            "Adaptive (image) τ=0.01",
+            "Adaptive (image) τ=0.02"
+        ]
+    );
     for c in cases {
         assert_eq!(c.samples, 4);
         for m in &c.methods {

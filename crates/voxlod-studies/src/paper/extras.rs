@@ -108,7 +108,12 @@ pub fn run(
     let cache = TruthCache::new(config.cache.clone());
     let mut result = ExtrasResult::default();
     for &rays in &extras.rays {
-        let c = PaperConfig { rays, thresholds: Vec::new(), ..config.clone() };
+        let c = PaperConfig {
+            rays,
+            thresholds: Vec::new(),
+            image_thresholds: Vec::new(),
+            ..config.clone()
+        };
         let run = super::run(&c, &|m| progress(&format!("{rays} rays/voxel: {m}")))?;
         for case in run.cases {
             for m in case.methods {

@@ -38,7 +38,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::Vec3;
-use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions};
+use voxlod_cpu::appearance::adaptive::{self, AdaptiveOptions, Selector};
 use voxlod_cpu::appearance::averages::AveragesGrid;
 use voxlod_cpu::appearance::line_sampler::SamplingContext;
 use voxlod_cpu::appearance::precompute::{PrecomputeOptions, precompute};
@@ -189,8 +189,10 @@ pub struct PaperConfig {
     pub seeds: u32,
     /// Sampling rays per voxel (the paper's 150).
     pub rays: u32,
-    /// Adaptive thresholds, one method each.
+    /// Adaptive thresholds of the held-out error, one method each.
     pub thresholds: Vec<f32>,
+    /// Adaptive thresholds of the image-error selector, one method each.
+    pub image_thresholds: Vec<f32>,
     /// Ambient term of the shading.
     pub ambient: Vec3,
     /// Where ground truths are cached (None: rendered every time).
@@ -210,6 +212,7 @@ impl PaperConfig {
             seeds: 2,
             rays: 150,
             thresholds: vec![0.1],
+            image_thresholds: vec![0.01, 0.02],
             ambient: Vec3::splat(0.1),
             cache: None,
             command: String::new(),
@@ -265,7 +268,7 @@ impl PaperConfig {
         if self.rays == 0 {
             return bad("rays", "0".into(), "at least 1 sampling ray per voxel");
         }
-        for &t in &self.thresholds {
+        for &t in self.thresholds.iter().chain(&self.image_thresholds) {
             if !(t.is_finite() && t >= 0.0) {
                 return bad("thresholds", t.to_string(), "finite and >= 0");
             }
@@ -478,7 +481,7 @@ fn build(
         precompute_ms: ms(t.elapsed()),
         repr: Repr::VirtualMesh(VirtualMeshGrid::new(g)),
     });
-    if !config.thresholds.is_empty() {
+    if !config.thresholds.is_empty() || !config.image_thresholds.is_empty() {
         progress("Adaptive");
         let t = Instant::now();
         // Adaptive's candidates are built once per seed for every variant: its virtual mesh is
@@ -493,11 +496,16 @@ fn build(
         };
         let candidates = adaptive::Candidates::build(ctx, &options)?;
         let candidates_ms = ms(t.elapsed());
-        for &threshold in &config.thresholds {
+        let selections = (config.thresholds.iter().map(|&t| (Selector::HeldOut, t)))
+            .chain(config.image_thresholds.iter().map(|&t| (Selector::Image, t)));
+        for (selector, threshold) in selections {
             let t = Instant::now();
-            let g = candidates.select(threshold)?;
+            let g = candidates.select_with(selector, threshold)?;
             built.push(Built {
-                method: format!("Adaptive τ={threshold}"),
+                method: match selector {
+                    Selector::HeldOut => format!("Adaptive τ={threshold}"),
+                    Selector::Image => format!("Adaptive (image) τ={threshold}"),
+                },
                 bytes_per_voxel: g.memory_bytes() as f64 / g.len().max(1) as f64,
                 precompute_ms: candidates_ms + ms(t.elapsed()),
                 repr: Repr::Any(Box::new(g)),
