@@ -255,6 +255,24 @@ impl AblationResult {
         for table in self.tables()? {
             report.table(table);
         }
+        for c in self.result.cases.iter().filter(|c| !c.figure.is_empty()) {
+            if c.variant != Variant::paper() && c.variant.name != Toggle::AllOurs.name() {
+                continue;
+            }
+            let name = format!(
+                "ablation-{}-{}-{}",
+                c.scene,
+                c.resolution,
+                super::tables::slug(&c.variant.name)
+            );
+            let caption = format!(
+                "{} {}³ ({}), view 0, seed 0: ground truth and each method",
+                c.scene, c.resolution, c.variant.name
+            );
+            let grid =
+                voxlod_eval::report::ImageGrid::new(c.figure.len().min(7) as u32, c.figure.clone());
+            report.images(name, caption, grid);
+        }
         report.heading(3, "Findings per variant");
         let text: Vec<String> = self.result.cases.iter().map(super::tables::findings).collect();
         report.text(text.join("\n\n"));

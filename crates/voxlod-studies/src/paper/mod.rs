@@ -570,7 +570,9 @@ fn run_group(
                     render_ms += ms(t.elapsed());
                     let m = voxlod_eval::compare(&crop.apply(&image), &crop.apply(reference))?;
                     if seed == 0 && mse.is_empty() {
-                        figures[g].push(LabeledImage::new(b.method.clone(), image));
+                        // The label font is ASCII.
+                        let label = b.method.replace('τ', "tau");
+                        figures[g].push(LabeledImage::new(label, image));
                     }
                     mse.push(m.mse);
                     ssim.push(m.ssim);
