@@ -12,13 +12,19 @@
 //!   rays per pixel box-filtered; scores on the whole image (the paper crops empty space for
 //!   display but does not say whether its scores were cropped: [`Variant::crop`] measures it).
 //! - **Methods**: Averages, \[VJK21\] (SGGX + non-exponential transmittance), the paper's
-//!   virtual mesh with its opacity subgrid read by [`Variant::rule`], and Adaptive at each
-//!   threshold of [`PaperConfig::thresholds`].
+//!   virtual mesh with its opacity subgrid, and Adaptive at each threshold of
+//!   [`PaperConfig::thresholds`] (held-out error) and [`PaperConfig::image_thresholds`] (image
+//!   error).
+//! - **The authors' choices** wherever their public code differs from voxlod's
+//!   ([`Variant::choices`]: their directional opacity, 40 random face samples, the unshaded
+//!   fallback, a cached \[VJK21\] chord, the Averages normal as stored) and a jittered pixel
+//!   pattern (§4); each of voxlod's choices is a deviation of the ablation.
 //!
 //! # Samples and intervals
 //! Every method is scored on `views × seeds` paired samples: the same cameras and, per seed,
-//! the same precompute lines (the only random source of the representations; the ground truth is
-//! seed 0, its own error is estimated from seed 1 and reported). Differences between methods,
+//! the same random sources of the representations (precompute lines, face samples, pixel
+//! jitter; the ground truth is seed 0, its own error is estimated from seed 1 and reported).
+//! Differences between methods,
 //! and between a variant and the paper setup, are paired per sample and carry the 95 %
 //! bootstrap interval of [`stats::PairedDiff`]; a difference is called only when that interval
 //! excludes zero.
