@@ -172,6 +172,7 @@ impl AblationResult {
                     Column::text("SSIM order"),
                     Column::text("virtual mesh − [VJK21] ΔSSIM [95 %]"),
                     Column::text("virtual mesh − [VJK21] ΔMSE [95 %]"),
+                    Column::text("truth error (MSE)"),
                     Column::text("wall (s)"),
                 ],
             );
@@ -226,6 +227,7 @@ impl AblationResult {
                     Cell::Text(order),
                     Cell::Text(dssim),
                     Cell::Text(dmse),
+                    Cell::Text(format!("{:.1e}", case.truth_error_mse)),
                     Cell::Text(format!("{:.1}", case.wall_ms / 1e3)),
                 ])?;
             }
@@ -254,6 +256,11 @@ impl AblationResult {
         );
         for table in self.tables()? {
             report.table(table);
+        }
+        for c in self.result.cases.iter().filter(|c| c.variant == Variant::paper()) {
+            if let Some(t) = c.adaptive_table()? {
+                report.table(t);
+            }
         }
         for c in self.result.cases.iter().filter(|c| !c.figure.is_empty()) {
             if c.variant != Variant::paper() && c.variant.name != Toggle::AllOurs.name() {

@@ -222,7 +222,7 @@ pub fn intro(config: &super::PaperConfig, result: &super::PaperResult) -> String
     format!(
         "Conditions of Brito, Poulin and Teichrieb (2023, §5): images at a side equal to the voxel \
          resolution, the ground truth at {spp} rays per pixel box-filtered (its own error, half \
-         the MSE of a second seed against the first, is in each table's heading line below), \
+         the MSE of a second seed against the first, is reported with each case), \
          {rays} sampling rays per voxel, the scene's sun and a point light on the camera's side \
          (an image under both is the sum of one render per light), white background unless a \
          variant says otherwise. Each method is scored on {views} views × {seeds} seeds of its \
