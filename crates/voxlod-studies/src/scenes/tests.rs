@@ -156,3 +156,32 @@ fn paper_scenes_have_the_papers_order_of_triangles() {
         assert!(n / paper_count as f64 > 0.98 && n / (paper_count as f64) < 1.7, "{spec}: {n}");
     }
 }
+
+/// Every directed edge (by position bits) used once, and its reverse once.
+fn closed(scene: &Scene) -> bool {
+    let mut edges = std::collections::BTreeMap::new();
+    for m in &scene.meshes {
+        let key = |i: u32| m.positions[i as usize].to_array().map(f32::to_bits);
+        for t in &m.indices {
+            for e in 0..3 {
+                *edges.entry((key(t[e]), key(t[(e + 1) % 3]))).or_insert(0u32) += 1;
+            }
+        }
+    }
+    edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+}
+
+#[test]
+fn the_closed_bunny_stays_closed_under_both_schemes() {
+    let bunny = load("builtin:bunny").unwrap();
+    assert!(closed(&bunny));
+    for spec in ["builtin:bunny?subdivide=2", "builtin:bunny?subdivide=2&subdivision=loop"] {
+        let fine = load(spec).unwrap();
+        assert_eq!(fine.triangle_count(), 16 * bunny.triangle_count(), "{spec}");
+        assert!(closed(&fine), "{spec} opened the bunny");
+    }
+    // Control: dropping one triangle opens it.
+    let mut open = bunny.clone();
+    open.meshes[0].indices.pop();
+    assert!(!closed(&open));
+}
